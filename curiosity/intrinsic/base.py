@@ -1,0 +1,32 @@
+"""The one interface every intrinsic reward implements (the paper's agent, ICM, RND, NSRS)."""
+
+from __future__ import annotations
+
+import abc
+
+from torch import Tensor
+
+from curiosity.types import TransitionBatch
+
+
+class IntrinsicReward(abc.ABC):
+    """An intrinsic reward module.
+
+    Subclasses implement :meth:`compute` (the raw bonus, no gradient) and :meth:`update` (one training step of
+    whatever the bonus learns, returning detached floats keyed by TensorBoard tag). Scaling is applied here, once:
+    ``__call__`` returns ``scale * compute(batch)``.
+    """
+
+    def __init__(self, scale: float = 1.0) -> None:
+        self.scale = float(scale)
+
+    @abc.abstractmethod
+    def compute(self, batch: TransitionBatch) -> Tensor:
+        """Raw bonus for each transition, shape (B,), computed without gradient."""
+
+    @abc.abstractmethod
+    def update(self, batch: TransitionBatch) -> dict[str, float]:
+        """One training update on ``batch``; returns logged scalars such as ``{"losses/icm_inverse": 1.09}``."""
+
+    def __call__(self, batch: TransitionBatch) -> Tensor:
+        return self.scale * self.compute(batch)

@@ -1,0 +1,62 @@
+"""Typed batches shared by losses, intrinsic rewards and agents."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import torch
+from torch import Tensor
+
+
+@dataclass
+class TransitionBatch:
+    """One-step transitions.
+
+    Attributes:
+        obs: (B, *obs_shape) float observations o_t.
+        act: (B,) long action indices a_t.
+        next_obs: (B, *obs_shape) float observations o_{t+1}.
+        rewards: (B,) float extrinsic rewards r_t.
+        terminateds: (B,) float in {0, 1}; 1 where o_{t+1} is terminal.
+    """
+
+    obs: Tensor
+    act: Tensor
+    next_obs: Tensor
+    rewards: Tensor
+    terminateds: Tensor
+
+    def __len__(self) -> int:
+        return int(self.act.shape[0])
+
+    def to(self, device: torch.device | str) -> TransitionBatch:
+        return TransitionBatch(*(t.to(device) for t in (self.obs, self.act, self.next_obs, self.rewards, self.terminateds)))
+
+
+@dataclass
+class SegmentBatch:
+    """n-step trajectory segments that never cross a terminal transition's successor.
+
+    Attributes:
+        obs: (B, n + 1, *obs_shape) observations o_t .. o_{t+n}.
+        act: (B, n) long actions a_t .. a_{t+n-1}.
+        rewards: (B, n) float rewards r_t .. r_{t+n-1}.
+        terminateds: (B, n) float in {0, 1}; d_{t+i} = 1 where o_{t+i+1} is terminal.
+    """
+
+    obs: Tensor
+    act: Tensor
+    rewards: Tensor
+    terminateds: Tensor
+
+    def __len__(self) -> int:
+        return int(self.act.shape[0])
+
+    @property
+    def horizon(self) -> int:
+        """n, the number of transitions per segment."""
+        return int(self.act.shape[1])
+
+    def first_step(self) -> TransitionBatch:
+        """The first transition of every segment as a :class:`TransitionBatch`."""
+        return TransitionBatch(self.obs[:, 0], self.act[:, 0], self.obs[:, 1], self.rewards[:, 0], self.terminateds[:, 0])
