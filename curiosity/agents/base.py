@@ -29,9 +29,10 @@ class Agent(abc.ABC):
     ) -> dict[str, float]:
         """Store the transition taken at env step ``step`` (0-based), train if scheduled, return logged scalars."""
 
+    @abc.abstractmethod
     def state_dict(self) -> dict[str, Any]:
         """Everything needed to resume the agent exactly (networks, optimisers, replay, RNGs)."""
-        return {}
 
+    @abc.abstractmethod
     def load_state_dict(self, state: dict[str, Any]) -> None:
         """Restore what :meth:`state_dict` returned."""

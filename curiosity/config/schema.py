@@ -1,0 +1,223 @@
+"""Typed schemas for every config group, registered with Hydra's ConfigStore.
+
+Each group option's YAML (``conf/<group>/<option>.yaml``) starts from its schema here through
+``defaults: [/schema/<group>/<option>@_here_, _self_]``, so an unknown key or a value of the wrong type fails while
+Hydra composes the config, before anything runs. Group options that build an object name it with ``_target_``;
+``name`` (and ``label``) are metadata that :func:`curiosity.config.build` drops before instantiation.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import Any
+
+from hydra.core.config_store import ConfigStore
+from omegaconf import MISSING
+
+
+class ObsKind(Enum):
+    pixels = "pixels"
+    state = "state"
+
+
+class Renderer(Enum):
+    gym = "gym"
+    fast = "fast"
+
+
+class Kernel(Enum):
+    gaussian = "gaussian"
+    yu = "yu"
+
+
+# ---------------------------------------------------------------- env
+@dataclass
+class EnvConfig:
+    name: str = MISSING
+    id: str = MISSING
+    obs: ObsKind = ObsKind.pixels
+    renderer: Renderer = Renderer.gym
+    frame_size: int = 32
+    frame_stack: int = 4
+    state_dim: int = MISSING  # length of the env's own observation vector (env.obs=state)
+    n_actions: int = 3
+    coverage_low: list[float] = MISSING
+    coverage_high: list[float] = MISSING
+    coverage_bins: list[int] = MISSING
+    fast_renderer: Any = MISSING
+
+
+# ---------------------------------------------------------------- encoder
+@dataclass
+class ConvEncoderConfig:
+    name: str = "conv"
+    _target_: str = "curiosity.nets.encoders.ConvEncoder"
+    in_channels: int = "${env.frame_stack}"  # type: ignore[assignment]
+    latent_dim: int = "${internal_dim}"  # type: ignore[assignment]
+
+
+@dataclass
+class MLPEncoderConfig:
+    name: str = "mlp"
+    _target_: str = "curiosity.nets.encoders.MLPEncoder"
+    in_dim: int = "${env.state_dim}"  # type: ignore[assignment]
+    latent_dim: int = "${internal_dim}"  # type: ignore[assignment]
+    hidden: list[int] = field(default_factory=lambda: [200, 100, 50, 10])
+
+
+# ---------------------------------------------------------------- entropy (the IB regulariser)
+@dataclass
+class GaussianPotentialConfig:
+    name: str = "gaussian_potential"
+    _target_: str = "curiosity.info.regularisers.GaussianPotentialRegulariser"
+    coef: float = 1.0
+    t: float = 2.0
+
+
+@dataclass
+class RenyiConfig:
+    name: str = "renyi"
+    _target_: str = "curiosity.info.regularisers.RenyiEntropyRegulariser"
+    coef: float = 1.0
+    alpha: float = 0.99
+    sigma: float = 2.0
+    kernel: Kernel = Kernel.gaussian
+    base: float = 2.0
+
+
+@dataclass
+class RenyiMIConfig(RenyiConfig):
+    name: str = "renyi_mi"
+    _target_: str = "curiosity.info.regularisers.RenyiMIRegulariser"
+
+
+@dataclass
+class NoEntropyConfig:
+    name: str = "none"
+    _target_: str = "curiosity.info.regularisers.NoRegulariser"
+
+
+# ---------------------------------------------------------------- estimator (novelty)
+class KDEBaseline(Enum):
+    scalar = "scalar"
+    pointwise = "pointwise"
+    zscore = "zscore"
+    none = "none"
+
+
+@dataclass
+class KDEConfig:
+    name: str = "kde"
+    _target_: str = "curiosity.novelty.estimators.KDENovelty"
+    bandwidth: float = 1.0
+    baseline: KDEBaseline = KDEBaseline.scalar
+
+
+@dataclass
+class KNNConfig:
+    name: str = "knn"
+    _target_: str = "curiosity.novelty.estimators.KNNNovelty"
+    k: int = 5
+
+
+# ---------------------------------------------------------------- backward predictor
+@dataclass
+class BackwardConfig:
+    name: str = MISSING
+    coef: float = 0.0
+    sigma_b: float = 1.0
+    n_candidates: int = 8
+    noise_dim: int = 4
+    hidden: int = 32
+
+
+# ---------------------------------------------------------------- planner
+@dataclass
+class MPCConfig:
+    name: str = "mpc"
+    _target_: str = "curiosity.planning.mpc.MPCPlanner"
+    horizon: int = 3
+    gamma: float = 0.9
+    temperature: float = 0.1
+    eta: float = 1.0
+    max_candidates: int = 243
+    n_actions: int = "${env.n_actions}"  # type: ignore[assignment]
+
+
+@dataclass
+class QTreeConfig:
+    name: str = "qtree"
+    _target_: str = "curiosity.planning.qtree.QTreePlanner"
+    horizon: int = 5  # tree depth
+    gamma: float = 0.8
+    n_actions: int = "${env.n_actions}"  # type: ignore[assignment]
+
+
+# ---------------------------------------------------------------- baseline (which agent runs)
+@dataclass
+class AgentConfig:
+    name: str = MISSING
+    label: str = MISSING  # method label: run directory and summary.json
+    _target_: str = MISSING
+
+
+# ---------------------------------------------------------------- budget
+@dataclass
+class BudgetConfig:
+    name: str = MISSING
+    max_steps: int = 3000  # env-step cap of the one continuing episode
+    warmup_steps: int = 64  # uniformly random steps first (they count towards steps-to-goal)
+    train_every: int = 1  # env steps between training calls
+    iters_per_train: int = 16  # gradient iterations per training call
+    ramp: list[int] = field(default_factory=list)  # multipliers of iters_per_train for the first calls
+    early_stop_every: int = 0  # check the early-stop rule every this many iterations (0: never)
+    early_stop_threshold: float = 0.00390625
+
+
+# ---------------------------------------------------------------- top level
+@dataclass
+class Config:
+    env: EnvConfig = MISSING
+    encoder: Any = MISSING
+    entropy: Any = MISSING
+    estimator: Any = MISSING
+    backward: BackwardConfig = MISSING
+    baseline: AgentConfig = MISSING
+    planner: Any = MISSING
+    budget: BudgetConfig = MISSING
+    # run
+    seed: int = 0
+    deterministic: bool = False
+    threads: int = 1
+    log_every: int = 10
+    progress: bool = True
+    method_label: str = "${baseline.label}"
+    # representation
+    internal_dim: int = 4
+
+
+_GROUP_SCHEMAS: dict[str, dict[str, type]] = {
+    "env": {"env": EnvConfig},
+    "encoder": {"conv": ConvEncoderConfig, "mlp": MLPEncoderConfig},
+    "entropy": {
+        "gaussian_potential": GaussianPotentialConfig,
+        "renyi": RenyiConfig,
+        "renyi_mi": RenyiMIConfig,
+        "none": NoEntropyConfig,
+    },
+    "estimator": {"kde": KDEConfig, "knn": KNNConfig},
+    "backward": {"backward": BackwardConfig},
+    "planner": {"mpc": MPCConfig, "qtree": QTreeConfig},
+    "baseline": {"agent": AgentConfig},
+    "budget": {"budget": BudgetConfig},
+}
+
+
+def register_schemas() -> None:
+    """Register the top-level schema as ``base_config`` and each option schema as ``schema/<group>/<name>``."""
+    cs = ConfigStore.instance()
+    cs.store(name="base_config", node=Config)
+    for group, schemas in _GROUP_SCHEMAS.items():
+        for name, node in schemas.items():
+            cs.store(group=f"schema/{group}", name=name, node=node)

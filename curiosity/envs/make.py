@@ -1,0 +1,71 @@
+"""Build the environment a run explores: one continuing episode, pixels (two renderers) or the state vector."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium.wrappers import (
+    AddRenderObservation,
+    DtypeObservation,
+    FrameStackObservation,
+    GrayscaleObservation,
+    ResizeObservation,
+)
+from hydra.utils import instantiate
+
+from curiosity.config.build import choice
+from curiosity.envs.wrappers import FastRenderObservation, NormalisePixels
+
+
+def _gym_frames(cfg: Any, max_steps: int) -> gym.Env:
+    """gymnasium's own rgb_array frame, resized first (INTER_AREA), then converted to gray."""
+    os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+    env = gym.make(cfg.id, render_mode="rgb_array", max_episode_steps=max_steps)
+    env = AddRenderObservation(env, render_only=True)
+    env = ResizeObservation(env, (cfg.frame_size, cfg.frame_size))
+    return GrayscaleObservation(env, keep_dim=False)
+
+
+def _fast_frames(cfg: Any, max_steps: int) -> gym.Env:
+    """Frames drawn straight at low resolution from the physical state (no pygame)."""
+    env = gym.make(cfg.id, max_episode_steps=max_steps)
+    return FastRenderObservation(env, instantiate(cfg.fast_renderer, size=cfg.frame_size), cfg.frame_size)
+
+
+_RENDERERS: dict[str, Callable[[Any, int], gym.Env]] = {"gym": _gym_frames, "fast": _fast_frames}
+
+
+def _pixels(cfg: Any, max_steps: int) -> gym.Env:
+    env = _RENDERERS[choice(cfg.renderer)](cfg, max_steps)
+    return FrameStackObservation(NormalisePixels(env), stack_size=cfg.frame_stack)
+
+
+def _state(cfg: Any, max_steps: int) -> gym.Env:
+    return DtypeObservation(gym.make(cfg.id, max_episode_steps=max_steps), np.float32)
+
+
+_OBS: dict[str, Callable[[Any, int], gym.Env]] = {"pixels": _pixels, "state": _state}
+
+
+def make_env(cfg: Any, max_steps: int) -> gym.Env:
+    """Build the env of an ``env`` config node.
+
+    Args:
+        cfg: the ``env`` node: ``id``, ``obs`` (pixels | state), ``renderer`` (gym | fast), ``frame_size``,
+            ``frame_stack``, ``fast_renderer``.
+        max_steps: the run's step cap; gymnasium's own episode limit (500 for Acrobot-v1) is raised to it.
+
+    Returns:
+        A gymnasium env. Pixels: observations (frame_stack, frame_size, frame_size) float32, (x - 128)/128, the last
+        ``frame_stack`` frames channel-first, the reset frame repeated at the start. State: the env's vector, float32.
+    """
+    return _OBS[choice(cfg.obs)](cfg, max_steps)
+
+
+def physical_state(env: gym.Env) -> np.ndarray:
+    """The true physical state of a classic-control env (Acrobot: theta1, theta2, dtheta1, dtheta2)."""
+    return np.asarray(env.unwrapped.state, dtype=np.float64)

@@ -1,0 +1,1 @@
+"""Running one experiment: seeding, the env-step loop, the logger façade, the run summary."""

@@ -1,0 +1,78 @@
+"""One logger façade feeding ``metrics.csv`` and TensorBoard from the same calls.
+
+``record(key, value)`` as often as you like (values are averaged until the next dump), then ``dump(step)`` once:
+one CSV row (flushed at once) and one TensorBoard scalar per recorded key, at the global env step. Keys are
+TensorBoard tags (``charts/coverage``, ``losses/transition``, ``intrinsic/reward``) and are also the CSV's column
+names; the columns are fixed when the logger is made, and recording an undeclared key is an error, so nothing
+logged is silently dropped.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from collections.abc import Sequence
+from pathlib import Path
+
+from torch.utils.tensorboard import SummaryWriter
+
+
+class RunLogger:
+    """CSV + TensorBoard logger of one run.
+
+    Args:
+        run_dir: the run directory; writes ``metrics.csv`` and ``tb/``.
+        columns: every key that may be recorded (``step`` is added first).
+        flush_secs: TensorBoard flush period; everything is flushed on :meth:`close`.
+    """
+
+    def __init__(self, run_dir: str | Path, columns: Sequence[str], flush_secs: int = 30) -> None:
+        self.run_dir = Path(run_dir)
+        self.run_dir.mkdir(parents=True, exist_ok=True)
+        self.columns = ["step", *dict.fromkeys(columns)]
+        self.csv_path = self.run_dir / "metrics.csv"
+        self._file = self.csv_path.open("w", newline="")
+        self._writer = csv.DictWriter(self._file, fieldnames=self.columns)
+        self._writer.writeheader()
+        self._file.flush()
+        self.tb = SummaryWriter(log_dir=str(self.run_dir / "tb"), flush_secs=flush_secs)
+        self._sums: dict[str, float] = {}
+        self._counts: dict[str, int] = {}
+
+    def record(self, key: str, value: float) -> None:
+        """Add one value of ``key`` to the current window (its mean is logged at the next dump)."""
+        if key not in self.columns or key == "step":
+            raise KeyError(f"metric {key!r} is not a declared column of metrics.csv; declared: {self.columns[1:]}")
+        self._sums[key] = self._sums.get(key, 0.0) + float(value)
+        self._counts[key] = self._counts.get(key, 0) + 1
+
+    def record_many(self, values: dict[str, float]) -> None:
+        for key, value in values.items():
+            self.record(key, value)
+
+    def dump(self, step: int) -> dict[str, float]:
+        """Write the window's means at global env step ``step``; returns them."""
+        means = {k: self._sums[k] / self._counts[k] for k in self._sums}
+        row: dict[str, object] = {"step": int(step)}
+        row.update({k: _fmt(v) for k, v in means.items()})
+        self._writer.writerow(row)
+        self._file.flush()
+        for key, value in means.items():
+            self.tb.add_scalar(key, value, int(step))
+        self._sums.clear()
+        self._counts.clear()
+        return means
+
+    def text(self, tag: str, text: str) -> None:
+        self.tb.add_text(tag, text, 0)
+
+    def close(self) -> None:
+        self.tb.close()
+        self._file.close()
+
+
+def _fmt(value: float) -> str:
+    """Shortest text that round-trips a float32-precision value (keeps the CSV small and deterministic)."""
+    if math.isfinite(value) and value == int(value) and abs(value) < 2**53:
+        return str(int(value))
+    return f"{value:.9g}"

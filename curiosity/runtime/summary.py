@@ -1,0 +1,54 @@
+"""``summary.json``: what a run achieved, and which code and config produced it."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+_REPO = Path(__file__).resolve().parents[2]
+
+
+def git_commit(repo: Path = _REPO) -> tuple[str, bool]:
+    """(HEAD commit, whether tracked files differ from it) of the checkout holding this package, or ("unknown", False)."""
+    try:
+        head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=repo, capture_output=True, text=True, check=True).stdout
+        dirty = subprocess.run(
+            ["git", "status", "--porcelain", "--untracked-files=no"], cwd=repo, capture_output=True, text=True, check=True
+        ).stdout
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown", False
+    return head.strip(), bool(dirty.strip())
+
+
+@dataclass
+class RunSummary:
+    """The fields of ``summary.json``.
+
+    ``steps_to_goal`` counts every env step, random warm-up included, up to and including the step that reached the
+    goal; it is ``None`` when the goal was not reached within ``max_steps`` (a censored run).
+    """
+
+    method: str
+    seed: int
+    env: str
+    steps_to_goal: int | None
+    reached_goal: bool
+    env_steps: int
+    max_steps: int
+    warmup_steps: int
+    final_coverage: float
+    wall_seconds: float
+    steps_per_second: float
+    git_commit: str
+    git_dirty: bool
+
+    def write(self, run_dir: str | Path) -> Path:
+        """Write ``summary.json`` atomically (temporary file + rename)."""
+        path = Path(run_dir) / "summary.json"
+        tmp = path.with_suffix(".json.tmp")
+        tmp.write_text(json.dumps(asdict(self), indent=2) + "\n")
+        os.replace(tmp, path)
+        return path

@@ -1,0 +1,48 @@
+"""Shared test helpers: compose the real configs, run the real CLI in a subprocess."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+import pytest
+from hydra import compose, initialize_config_dir
+from omegaconf import DictConfig
+
+from curiosity.config import setup
+
+REPO = Path(__file__).resolve().parents[1]
+CONF = REPO / "conf"
+
+os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+setup()
+
+
+def compose_cfg(overrides: Sequence[str] = ()) -> DictConfig:
+    """The composed run config for ``overrides`` (no Hydra runtime node)."""
+    with initialize_config_dir(config_dir=str(CONF), version_base="1.3"):
+        return compose(config_name="config", overrides=list(overrides))
+
+
+@pytest.fixture
+def cfg_for() -> Callable[..., DictConfig]:
+    return lambda *overrides: compose_cfg(overrides)
+
+
+def run_cli(args: Sequence[str], cwd: Path, timeout: float = 600) -> subprocess.CompletedProcess:
+    """``python -m runners.train *args`` in a subprocess, from ``cwd``, progress bar off."""
+    env = {**os.environ, "HYDRA_FULL_ERROR": "0", "PYTHONPATH": str(REPO)}
+    return subprocess.run(
+        [sys.executable, "-m", "runners.train", *args, "progress=false"],
+        cwd=cwd, env=env, capture_output=True, text=True, timeout=timeout,
+    )  # fmt: skip
+
+
+def group_options() -> list[tuple[str, str]]:
+    """Every (group, option) pair under ``conf/`` (hydra/ excluded)."""
+    return sorted(
+        (p.parent.name, p.stem) for p in CONF.glob("*/*.yaml") if p.parent.name not in {"hydra", "experiment"}
+    )

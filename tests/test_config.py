@@ -1,0 +1,127 @@
+"""Config groups compose, typed schemas reject bad input, seed ranges expand."""
+
+from __future__ import annotations
+
+import pytest
+from hydra.errors import ConfigCompositionException
+from omegaconf import OmegaConf
+from omegaconf.errors import ConfigAttributeError, ValidationError
+
+from curiosity.config import ConfigError, validate
+from curiosity.config.ranges import RangeError, expand_ranges
+from tests.conftest import compose_cfg, group_options
+
+PUBLIC_GROUPS = {
+    "env": {"acrobot", "mountaincar"},
+    "encoder": {"conv", "mlp"},
+    "entropy": {"gaussian_potential", "renyi", "renyi_mi", "none"},
+    "estimator": {"kde", "knn"},
+    "backward": {"off", "on"},
+    "baseline": {"none", "icm", "rnd", "nsrs", "random"},
+    "planner": {"mpc", "qtree"},
+    "budget": {"smoke", "quick", "paper"},
+}
+
+
+def test_public_groups_and_options_exist() -> None:
+    found: dict[str, set[str]] = {}
+    for group, option in group_options():
+        found.setdefault(group, set()).add(option)
+    for group, options in PUBLIC_GROUPS.items():
+        assert options <= found[group], f"{group}: missing {options - found[group]}"
+
+
+@pytest.mark.parametrize(("group", "option"), group_options())
+def test_every_option_composes_and_validates(group: str, option: str) -> None:
+    extra = ["env.obs=state"] if (group, option) == ("encoder", "mlp") else []
+    cfg = compose_cfg([f"{group}={option}", *extra])
+    resolved = OmegaConf.to_container(cfg, resolve=True)
+    assert isinstance(resolved, dict)
+    if group in {"env", "entropy", "estimator", "backward", "planner", "budget", "baseline", "encoder"}:
+        assert cfg[group].name == option
+    validate(cfg)
+
+
+def test_defaults_are_the_paper_agent_on_acrobot_pixels() -> None:
+    cfg = compose_cfg()
+    assert (cfg.env.id, cfg.env.obs.value, cfg.baseline.name, cfg.budget.name) == ("Acrobot-v1", "pixels", "none", "quick")
+    assert cfg.budget.max_steps == 3000 and cfg.planner.name == "mpc" and cfg.estimator.name == "kde"
+
+
+@pytest.mark.parametrize(
+    "key", ["seed", "budget.max_steps", "budget.warmup_steps", "planner.horizon", "env.renderer", "env.obs"]
+)
+def test_canonical_keys_exist(key: str) -> None:
+    assert OmegaConf.select(compose_cfg(), key) is not None
+
+
+def test_canonical_estimator_keys() -> None:
+    assert compose_cfg(["estimator=kde"]).estimator.bandwidth > 0
+    assert compose_cfg(["estimator=knn"]).estimator.k >= 1
+
+
+@pytest.mark.parametrize(
+    ("override", "error"),
+    [
+        ("seed=1.5", ValidationError),
+        ("seed=abc", ValidationError),
+        ("budget.max_steps=abc", ValidationError),
+        ("env.renderer=slow", ValidationError),
+        ("env.obs=rgb", ValidationError),
+        ("estimator.k=3", ConfigAttributeError),  # kde has no k
+        ("planner.bogus=1", ConfigAttributeError),
+    ],
+)
+def test_typed_schema_rejects_bad_values(override: str, error: type[Exception]) -> None:
+    with pytest.raises(ConfigCompositionException) as info:
+        compose_cfg([override])
+    key = override.split("=")[0]
+    # Hydra's message names the key; the OmegaConf error behind it says what is wrong.
+    assert key in str(info.value), str(info.value)
+    cause = info.value.__cause__ or info.value.__context__
+    assert isinstance(cause, error), repr(cause)
+
+
+@pytest.mark.parametrize(
+    ("overrides", "key"),
+    [
+        (["budget.max_steps=-5"], "budget.max_steps"),
+        (["budget.max_steps=64"], "budget.max_steps"),  # not more than the 64 warm-up steps
+        (["budget.warmup_steps=-1"], "budget.warmup_steps"),
+        (["seed=-3"], "seed"),
+        (["log_every=0"], "log_every"),
+        (["estimator.bandwidth=0"], "estimator.bandwidth"),
+        (["estimator=knn", "estimator.k=0"], "estimator.k"),
+        (["planner.horizon=0"], "planner.horizon"),
+        (["entropy=renyi", "entropy.alpha=-1"], "entropy.alpha"),
+        (["entropy=renyi", "entropy.sigma=0"], "entropy.sigma"),
+        (["env.coverage_bins=[10,0,10,10]"], "env.coverage_bins"),
+    ],
+)
+def test_validation_names_key_value_and_rule(overrides: list[str], key: str) -> None:
+    with pytest.raises(ConfigError) as info:
+        validate(compose_cfg(overrides))
+    assert key in str(info.value) and "must be" in str(info.value)
+
+
+@pytest.mark.parametrize(
+    ("argv", "expected"),
+    [
+        (["seed=0-3"], ["seed=range(0,4)"]),
+        (["seed=5-5"], ["seed=range(5,6)"]),
+        (["seed=0-2,7"], ["seed=0,1,2,7"]),
+        (["seed=0,1,2"], ["seed=0,1,2"]),
+        (["seed=range(0,4)"], ["seed=range(0,4)"]),
+        (["seed=4"], ["seed=4"]),
+        (["name=1-2", "estimator=kde,knn"], ["name=1-2", "estimator=kde,knn"]),
+        (["-m", "seed=10-12", "budget=smoke"], ["-m", "seed=range(10,13)", "budget=smoke"]),
+    ],
+)
+def test_expand_ranges(argv: list[str], expected: list[str]) -> None:
+    assert expand_ranges(argv) == expected
+
+
+@pytest.mark.parametrize("arg", ["seed=3-1", "seed=a-b", "seed=1-b", "seed=0-3-5", "seed=0,3-1"])
+def test_bad_ranges_name_seed(arg: str) -> None:
+    with pytest.raises(RangeError, match="seed="):
+        expand_ranges([arg])
