@@ -22,7 +22,11 @@ class IntrinsicReward(abc.ABC):
 
     @abc.abstractmethod
     def compute(self, batch: TransitionBatch) -> Tensor:
-        """Raw bonus for each transition, shape (B,), computed without gradient."""
+        """Raw bonus for each transition, shape (B,), computed without gradient.
+
+        Must change no state (networks, optimisers, running statistics): a planner may call it many times per env
+        step. Statistics move only in :meth:`update` or in a method the subclass documents (e.g. ``RND.observe``).
+        """
 
     @abc.abstractmethod
     def update(self, batch: TransitionBatch) -> dict[str, float]:
