@@ -1,0 +1,39 @@
+"""Residual latent transition model T_ψ([s, a]) (method.md §2)."""
+
+from __future__ import annotations
+
+import torch
+from torch import Tensor, nn
+
+from curiosity.nets.encoders import tanh_mlp
+
+
+class ResidualTransition(nn.Module):
+    """ŝ' = s + f([s, onehot a]) with f = Linear(d+A, h) → 30 → 30 → h → d, tanh and dropout after each hidden layer.
+
+    Dropout is active only in train mode; call ``.eval()`` for planning and reward evaluation.
+
+    Args:
+        latent_dim: d.
+        n_actions: A.
+        hidden: h, the outer hidden width (10 in NSRS and the paper).
+        dropout: dropout probability (paper 0.5, NSRS code 0.1).
+    """
+
+    def __init__(self, latent_dim: int, n_actions: int, hidden: int = 10, dropout: float = 0.5) -> None:
+        super().__init__()
+        self.latent_dim = latent_dim
+        self.n_actions = n_actions
+        self.net = tanh_mlp([latent_dim + n_actions, hidden, 30, 30, hidden, latent_dim], dropout=dropout)
+
+    def forward(self, z: Tensor, a_onehot: Tensor) -> Tensor:
+        """Predict the next latent.
+
+        Args:
+            z: (B, d) latents.
+            a_onehot: (B, A) one-hot actions.
+
+        Returns:
+            (B, d) predicted next latents z + f([z, a]).
+        """
+        return z + self.net(torch.cat([z, a_onehot], dim=-1))

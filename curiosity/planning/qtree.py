@@ -1,0 +1,84 @@
+"""Exhaustive novelty + Q tree search of NSRS (nsrs-protocol.md §5), with the subtree bookkeeping done right."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import torch
+from torch import Tensor
+
+StepFn = Callable[[Tensor, Tensor], Tensor]
+NoveltyFn = Callable[[Tensor], Tensor]
+QFn = Callable[[Tensor], Tensor]
+
+
+class QTreePlanner:
+    """Depth-D tree over all A^D action sequences with novelty rewards on predicted states and Q at the leaves.
+
+        V(a_0) = n(ẑ_1) + γ max_{a_1} [ n(ẑ_2) + γ max_{a_2} [ … n(ẑ_D) + γ max_{a_D} Q(ẑ_D, a_D) ] ],
+        ẑ_0 = z0,  ẑ_{k+1} = T(ẑ_k, a_k).
+
+    D novelty terms (on ẑ_1 .. ẑ_D, the states reached) and one Q term at the deepest state. Level k holds A^k
+    states in state-major order: the child of node j under action a is row j·A + a, so backing up is
+    ``v.reshape(A^(k-1), A).max(1)``. (NSRS's released code builds levels action-major and reshapes state-major,
+    which mixes subtrees at depth ≥ 2.)
+
+    Args:
+        horizon: the tree depth D ≥ 1 (the ``planner.horizon`` key, shared with MPC).
+        gamma: discount γ.
+        n_actions: A.
+    """
+
+    def __init__(self, horizon: int = 5, gamma: float = 0.8, n_actions: int = 3) -> None:
+        if horizon < 1:
+            raise ValueError("horizon (the tree depth) must be >= 1")
+        self.depth = horizon
+        self.gamma = gamma
+        self.n_actions = n_actions
+
+    def expand(self, z: Tensor, step_fn: StepFn) -> Tensor:
+        """All children of a level, state-major.
+
+        Args:
+            z: (N, d) latents of one level.
+            step_fn: T(z (M, d), a (M,) long) -> (M, d).
+
+        Returns:
+            (N·A, d); row j·A + a is T(z_j, a).
+        """
+        actions = torch.arange(self.n_actions, device=z.device).repeat(z.shape[0])
+        return step_fn(z.repeat_interleave(self.n_actions, dim=0), actions)
+
+    def values(self, z0: Tensor, step_fn: StepFn, intrinsic_fn: NoveltyFn, q_fn: QFn) -> Tensor:
+        """Root action values V(a_0).
+
+        Args:
+            z0: (d,) current latent.
+            step_fn: T(z (M, d), a (M,) long) -> (M, d), in eval mode.
+            intrinsic_fn: n(z_next (M, d)) -> (M,).
+            q_fn: Q(z (M, d)) -> (M, A).
+
+        Returns:
+            (A,) V(a_0) for every first action.
+        """
+        with torch.no_grad():
+            z = z0.unsqueeze(0)
+            novelty = []
+            for _ in range(self.depth):
+                z = self.expand(z, step_fn)
+                novelty.append(intrinsic_fn(z))
+            value = novelty[-1] + self.gamma * q_fn(z).max(dim=1).values
+            for level in reversed(novelty[:-1]):
+                value = level + self.gamma * value.reshape(-1, self.n_actions).max(dim=1).values
+        return value
+
+    def plan(self, z0: Tensor, step_fn: StepFn, intrinsic_fn: NoveltyFn, q_fn: QFn) -> tuple[int, dict[str, float]]:
+        """Greedy root action argmax_a V(a) (ties to the lowest index).
+
+        Returns:
+            (action, info) with info keys ``best_value`` and ``value_gap`` (best minus runner-up; 0 with one action).
+        """
+        value = self.values(z0, step_fn, intrinsic_fn, q_fn)
+        top = torch.topk(value, min(2, value.numel())).values
+        gap = float(top[0] - top[1]) if top.numel() > 1 else 0.0
+        return int(torch.argmax(value)), {"best_value": float(top[0]), "value_gap": gap}

@@ -1,0 +1,98 @@
+"""Shapes, parameter counts and train/eval behaviour of the networks."""
+
+from __future__ import annotations
+
+import pytest
+import torch
+
+from curiosity.nets import BackwardPredictor, ConvEncoder, MLPEncoder, QNetwork, ResidualTransition, RewardModel, one_hot
+
+
+def n_params(module: torch.nn.Module) -> int:
+    return sum(p.numel() for p in module.parameters())
+
+
+def test_one_hot():
+    out = one_hot(torch.tensor([2, 0, 1]), 3)
+    assert out.dtype == torch.float32
+    assert torch.equal(out, torch.tensor([[0.0, 0, 1], [1, 0, 0], [0, 1, 0]]))
+
+
+def test_conv_encoder_shape_and_parameter_count():
+    enc = ConvEncoder(in_channels=4, latent_dim=4)
+    assert n_params(enc) == 6620
+    assert enc(torch.randn(5, 4, 32, 32)).shape == (5, 4)
+    assert ConvEncoder(latent_dim=2)(torch.randn(3, 4, 32, 32)).shape == (3, 2)
+
+
+def test_conv_encoder_layout_does_not_change_the_function():
+    torch.manual_seed(0)
+    nhwc = ConvEncoder(channels_last=True)
+    nchw = ConvEncoder(channels_last=False)
+    nchw.load_state_dict(nhwc.state_dict())
+    x = torch.randn(6, 4, 32, 32)
+    torch.testing.assert_close(nhwc(x), nchw(x), rtol=1e-5, atol=1e-6)
+    nhwc(x).sum().backward()
+    assert all(p.grad is not None for p in nhwc.parameters())
+
+
+def test_mlp_encoder_shape_and_layers():
+    enc = MLPEncoder(in_dim=6, latent_dim=2)
+    widths = [m.out_features for m in enc.modules() if isinstance(m, torch.nn.Linear)]
+    assert widths == [200, 100, 50, 10, 2]
+    assert enc(torch.randn(7, 6)).shape == (7, 2)
+    assert enc(torch.randn(7, 2, 3)).shape == (7, 2)
+
+
+def test_transition_shape_residual_and_widths():
+    torch.manual_seed(0)
+    model = ResidualTransition(latent_dim=4, n_actions=3).eval()
+    widths = [(m.in_features, m.out_features) for m in model.modules() if isinstance(m, torch.nn.Linear)]
+    assert widths == [(7, 10), (10, 30), (30, 30), (30, 10), (10, 4)]
+    z, a = torch.randn(8, 4), one_hot(torch.randint(3, (8,)), 3)
+    out = model(z, a)
+    assert out.shape == (8, 4)
+    torch.testing.assert_close(out - z, model.net(torch.cat([z, a], -1)))
+
+
+def test_transition_dropout_active_only_in_train_mode():
+    torch.manual_seed(0)
+    model = ResidualTransition(latent_dim=4, n_actions=3, dropout=0.5)
+    z, a = torch.randn(16, 4), one_hot(torch.randint(3, (16,)), 3)
+    model.train()
+    assert not torch.equal(model(z, a), model(z, a))
+    model.eval()
+    assert torch.equal(model(z, a), model(z, a))
+
+
+def test_reward_model_shape_and_widths():
+    model = RewardModel(latent_dim=4, n_actions=3)
+    widths = [m.out_features for m in model.modules() if isinstance(m, torch.nn.Linear)]
+    assert widths == [10, 50, 20, 1]
+    assert model(torch.randn(9, 7)).shape == (9,)
+
+
+def test_backward_predictor_shape_and_fresh_noise():
+    model = BackwardPredictor(latent_dim=4, n_actions=3, n_candidates=5)
+    z = torch.randn(6, 4)
+    out = model(z)
+    assert out.shape == (6, 5, 7)
+    assert not torch.equal(out, model(z))
+    assert not torch.equal(out[:, 0], out[:, 1])
+    g1, g2 = torch.Generator().manual_seed(3), torch.Generator().manual_seed(3)
+    assert torch.equal(model(z, generator=g1), model(z, generator=g2))
+
+
+def test_q_network_shape_and_widths():
+    model = QNetwork(latent_dim=4, n_actions=3)
+    widths = [(m.in_features, m.out_features) for m in model.modules() if isinstance(m, torch.nn.Linear)]
+    assert widths == [(4, 20), (20, 50), (50, 20), (20, 3)]
+    assert sum(isinstance(m, torch.nn.ReLU) for m in model.modules()) == 3
+    assert model(torch.randn(2, 4)).shape == (2, 3)
+
+
+@pytest.mark.parametrize("module", [RewardModel(2, 3), QNetwork(2, 3), MLPEncoder(5, 2)])
+def test_gradients_reach_every_parameter(module):
+    x = torch.randn(4, next(module.parameters()).shape[1])
+    module(x).sum().backward()
+    assert all(p.grad is not None and torch.isfinite(p.grad).all() for p in module.parameters())
