@@ -1,0 +1,46 @@
+"""Input checks, memory chunking and the fused squared-distance kernel shared by the KDE and kNN scores."""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Iterator
+
+import torch
+from torch import Tensor
+
+from curiosity.info.kernels import check_2d
+
+DEFAULT_CHUNK = 16384
+
+
+def check_query_memory(query: Tensor, memory: Tensor, exclude_self: bool) -> None:
+    """Validate query (B, d) against memory (N, d); with ``exclude_self`` the query must be the memory (B == N)."""
+    check_2d(query, "query")
+    check_2d(memory, "memory")
+    if query.shape[1] != memory.shape[1]:
+        raise ValueError(f"query and memory need the same d, got {query.shape[1]} and {memory.shape[1]}")
+    if exclude_self and query.shape[0] != memory.shape[0]:
+        raise ValueError("exclude_self=True needs query to be the memory itself (B == N, row i = memory row i)")
+
+
+def chunks(n: int, chunk_size: int, min_size: int = 1) -> Iterator[tuple[int, int]]:
+    """Yield (start, stop) pairs covering range(n) in steps of ``chunk_size``; no chunk is smaller than ``min_size``
+    (a short last chunk is merged into the previous one) unless n itself is."""
+    if chunk_size < 1:
+        raise ValueError(f"chunk_size must be >= 1, got {chunk_size}")
+    step = max(chunk_size, min_size)
+    bounds = [*range(0, n, step), n]
+    if len(bounds) > 2 and bounds[-1] - bounds[-2] < min_size:
+        del bounds[-2]
+    yield from itertools.pairwise(bounds)
+
+
+def needs_grad(*xs: Tensor) -> bool:
+    """True when autograd will record operations on any of ``xs`` (then no in-place shortcuts)."""
+    return torch.is_grad_enabled() and any(x.requires_grad for x in xs)
+
+
+def sq_dists_chunk(q64: Tensor, q2: Tensor, m64: Tensor, inplace: bool) -> Tensor:
+    """||q_b - m_i||^2 = ||q||^2 + ||m||^2 - 2 q.m for float64 q (B, d), q2 = ||q||^2 (B, 1), m (M, d) -> (B, M) ≥ 0."""
+    d2 = torch.addmm(m64.pow(2).sum(-1).unsqueeze(0), q64, m64.T, alpha=-2.0)
+    return d2.add_(q2).clamp_(min=0.0) if inplace else (d2 + q2).clamp(min=0.0)

@@ -1,0 +1,71 @@
+"""Gaussian kernel density of queries over a memory of embeddings (paper §3.3.1), exact and chunked."""
+
+from __future__ import annotations
+
+import math
+
+import torch
+from torch import Tensor
+
+from curiosity.info.kernels import out_dtype
+from curiosity.novelty._common import DEFAULT_CHUNK, check_query_memory, chunks, needs_grad, sq_dists_chunk
+
+
+def _chunk_log_sum(d2: Tensor, inv_two_h2: float, inplace: bool) -> Tensor:
+    """log Σ_i exp(−d2_bi / (2h²)) for one chunk (B, M) -> (B,), shifted by the row minimum of d2 for stability."""
+    d_min = d2.min(dim=1, keepdim=True).values
+    if inplace:
+        s = d2.sub_(d_min).mul_(-inv_two_h2).exp_().sum(dim=1)
+    else:
+        s = torch.exp((d2 - d_min) * -inv_two_h2).sum(dim=1)
+    return s.log() - d_min.squeeze(1) * inv_two_h2
+
+
+def kde_log_density(
+    query: Tensor, memory: Tensor, *, bandwidth: float, exclude_self: bool = False, chunk_size: int = DEFAULT_CHUNK
+) -> Tensor:
+    """Log of the (unnormalised) Gaussian KDE of each query over the memory.
+
+    log ρ(q_b) = log( (1/N) Σ_i exp(−‖q_b − m_i‖² / (2h²)) ) = logsumexp_i(−‖q_b − m_i‖²/(2h²)) − log N.
+
+    The Gaussian normaliser (2πh²)^(−d/2) is left out, as in the paper, so
+    ``sklearn.neighbors.KernelDensity(bandwidth=h).score_samples(q) + (d/2) log(2πh²)`` equals this value.
+    Exact for any N: the memory is processed in chunks of ``chunk_size`` rows in float64, each chunk's log-sum is
+    shifted by its smallest squared distance, and the chunks are combined with a logsumexp. Far-away queries give large
+    negative but finite values (never −inf or NaN).
+
+    Does a query count itself? Every memory row counts, so a query that is also stored in the memory contributes its
+    own term exp(0) = 1 (resubstitution KDE, as sklearn's ``score_samples`` on its own training data). With
+    ``exclude_self=True`` the query must be the memory itself (B == N) and row i leaves out memory row i
+    (leave-one-out): log( (1/(N−1)) Σ_{j≠i} exp(−‖m_i − m_j‖²/(2h²)) ).
+
+    Args:
+        query: (B, d) query embeddings.
+        memory: (N, d) stored embeddings (N ≥ 2 with ``exclude_self``).
+        bandwidth: kernel bandwidth h > 0.
+        exclude_self: leave-one-out densities of the memory's own rows (see above).
+        chunk_size: memory rows per chunk (peak memory ≈ B × chunk_size float64 values).
+
+    Returns:
+        (B,) log-densities in the promoted dtype of ``query`` and ``memory``, differentiable in both.
+    """
+    check_query_memory(query, memory, exclude_self)
+    if not bandwidth > 0:
+        raise ValueError(f"bandwidth must be > 0, got {bandwidth}")
+    n = memory.shape[0] - int(exclude_self)
+    if n < 1:
+        raise ValueError("exclude_self=True needs at least 2 memory rows")
+    inplace = not needs_grad(query, memory)
+    inv_two_h2 = 1.0 / (2.0 * float(bandwidth) ** 2)
+    q64 = query.to(torch.float64)
+    q2 = q64.pow(2).sum(-1, keepdim=True)
+    rows = torch.arange(query.shape[0], device=query.device).unsqueeze(1)
+    parts = []
+    # with exclude_self every chunk has >= 2 columns, so no row of a chunk is entirely left out
+    for start, stop in chunks(memory.shape[0], chunk_size, min_size=2 if exclude_self else 1):
+        d2 = sq_dists_chunk(q64, q2, memory[start:stop].to(torch.float64), inplace)
+        if exclude_self:
+            d2 = d2.masked_fill(rows == torch.arange(start, stop, device=query.device).unsqueeze(0), math.inf)
+        parts.append(_chunk_log_sum(d2, inv_two_h2, inplace))
+    log_rho = parts[0] if len(parts) == 1 else torch.logsumexp(torch.stack(parts, dim=1), dim=1)
+    return (log_rho - math.log(n)).to(out_dtype(query, memory))
