@@ -148,6 +148,11 @@ def brute_force_tree(z0, step, novelty, q, depth, gamma, n_actions=3):
     )
 
 
+def on_reached_state(novelty):
+    """NSRS's edge reward: the novelty of the state reached."""
+    return lambda z, a, z_next: novelty(z_next)
+
+
 def released_nsrs_values(z0, step, novelty, q, depth, gamma, n_actions=3):
     """NSRS's released ordering: levels built action-major (row j·n + i) but backed up as if state-major."""
     z, levels = z0.unsqueeze(0), []
@@ -178,8 +183,9 @@ def test_qtree_equals_recursive_brute_force(depth):
     with torch.no_grad():
         planner = QTreePlanner(horizon=depth, gamma=0.8)
         expected = brute_force_tree(z0, step, novelty, qnet, depth, 0.8)
-        torch.testing.assert_close(planner.values(z0, step, novelty, qnet), expected)
-        assert planner.plan(z0, step, novelty, qnet)[0] == int(expected.argmax())
+        edge = on_reached_state(novelty)
+        torch.testing.assert_close(planner.values(z0, step, edge, qnet), expected)
+        assert planner.plan(z0, step, edge, qnet)[0] == int(expected.argmax())
 
 
 def path_step(z, a):
@@ -198,10 +204,10 @@ def zero_q(z):
 def test_qtree_fixes_the_released_subtree_mixup():
     z0 = torch.zeros(1, dtype=torch.float64)
     planner = QTreePlanner(horizon=2, gamma=0.8)
-    values = planner.values(z0, path_step, path_novelty, zero_q)
+    values = planner.values(z0, path_step, on_reached_state(path_novelty), zero_q)
     assert values.tolist() == pytest.approx([0.0, 0.0, 4.0])
     torch.testing.assert_close(values, brute_force_tree(z0, path_step, path_novelty, zero_q, 2, 0.8))
-    assert planner.plan(z0, path_step, path_novelty, zero_q)[0] == 2
+    assert planner.plan(z0, path_step, on_reached_state(path_novelty), zero_q)[0] == 2
     released = released_nsrs_values(z0, path_step, path_novelty, zero_q, 2, 0.8)
     assert int(released.argmax()) == 0  # the released ordering credits the novel leaf to a0 = 0
 
@@ -210,5 +216,24 @@ def test_qtree_levels_are_state_major_and_ties_go_low():
     planner = QTreePlanner(horizon=2, n_actions=3)
     children = planner.expand(torch.tensor([[0.0], [1.0]]), path_step)
     assert children[:, 0].tolist() == [0, 1, 2, 10, 11, 12]
-    action, info = planner.plan(torch.zeros(1), path_step, lambda z: torch.zeros(z.shape[0]), zero_q)
+    action, info = planner.plan(torch.zeros(1), path_step, lambda z, a, zn: torch.zeros(zn.shape[0]), zero_q)
     assert action == 0 and info["value_gap"] == 0.0
+
+
+def test_qtree_edge_reward_sees_parent_action_and_child() -> None:
+    """A state-action edge reward (novelty of [z, a]) is applied to the pair taken, not to the state reached."""
+    planner = QTreePlanner(horizon=1, gamma=0.5)
+    seen = []
+
+    def edge(z, a, z_next):
+        seen.append((z.clone(), a.clone(), z_next.clone()))
+        return a.to(z.dtype) * 10.0
+
+    def step(z, a):
+        return z + a.unsqueeze(1).to(z.dtype)
+
+    values = planner.values(torch.tensor([1.0]), step, edge, lambda z: torch.zeros(z.shape[0], 3))
+    torch.testing.assert_close(values, torch.tensor([0.0, 10.0, 20.0]))
+    z, a, z_next = seen[0]
+    assert torch.equal(z, torch.ones(3, 1)) and torch.equal(a, torch.arange(3))
+    assert torch.equal(z_next[:, 0], torch.tensor([1.0, 2.0, 3.0]))

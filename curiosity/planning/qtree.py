@@ -8,7 +8,7 @@ import torch
 from torch import Tensor
 
 StepFn = Callable[[Tensor, Tensor], Tensor]
-NoveltyFn = Callable[[Tensor], Tensor]
+EdgeRewardFn = Callable[[Tensor, Tensor, Tensor], Tensor]
 QFn = Callable[[Tensor], Tensor]
 
 
@@ -18,7 +18,8 @@ class QTreePlanner:
         V(a_0) = n(ẑ_1) + γ max_{a_1} [ n(ẑ_2) + γ max_{a_2} [ … n(ẑ_D) + γ max_{a_D} Q(ẑ_D, a_D) ] ],
         ẑ_0 = z0,  ẑ_{k+1} = T(ẑ_k, a_k).
 
-    D novelty terms (on ẑ_1 .. ẑ_D, the states reached) and one Q term at the deepest state. Level k holds A^k
+    D novelty terms (NSRS: on ẑ_1 .. ẑ_D, the states reached; the intrinsic function sees each edge (ẑ_k, a_k, ẑ_{k+1}),
+    so it may score state–action pairs instead) and one Q term at the deepest state. Level k holds A^k
     states in state-major order: the child of node j under action a is row j·A + a, so backing up is
     ``v.reshape(A^(k-1), A).max(1)``. (NSRS's released code builds levels action-major and reshapes state-major,
     which mixes subtrees at depth ≥ 2.)
@@ -49,13 +50,14 @@ class QTreePlanner:
         actions = torch.arange(self.n_actions, device=z.device).repeat(z.shape[0])
         return step_fn(z.repeat_interleave(self.n_actions, dim=0), actions)
 
-    def values(self, z0: Tensor, step_fn: StepFn, intrinsic_fn: NoveltyFn, q_fn: QFn) -> Tensor:
+    def values(self, z0: Tensor, step_fn: StepFn, intrinsic_fn: EdgeRewardFn, q_fn: QFn) -> Tensor:
         """Root action values V(a_0).
 
         Args:
             z0: (d,) current latent.
             step_fn: T(z (M, d), a (M,) long) -> (M, d), in eval mode.
-            intrinsic_fn: n(z_next (M, d)) -> (M,).
+            intrinsic_fn: the reward of each edge, r(z (M, d), a (M,) long, z_next (M, d)) -> (M,); NSRS uses the
+                novelty of the reached state, ``lambda z, a, z_next: n(z_next)``.
             q_fn: Q(z (M, d)) -> (M, A).
 
         Returns:
@@ -65,14 +67,16 @@ class QTreePlanner:
             z = z0.unsqueeze(0)
             novelty = []
             for _ in range(self.depth):
-                z = self.expand(z, step_fn)
-                novelty.append(intrinsic_fn(z))
+                parents = z.repeat_interleave(self.n_actions, dim=0)
+                actions = torch.arange(self.n_actions, device=z.device).repeat(z.shape[0])
+                z = step_fn(parents, actions)
+                novelty.append(intrinsic_fn(parents, actions, z))
             value = novelty[-1] + self.gamma * q_fn(z).max(dim=1).values
             for level in reversed(novelty[:-1]):
                 value = level + self.gamma * value.reshape(-1, self.n_actions).max(dim=1).values
         return value
 
-    def plan(self, z0: Tensor, step_fn: StepFn, intrinsic_fn: NoveltyFn, q_fn: QFn) -> tuple[int, dict[str, float]]:
+    def plan(self, z0: Tensor, step_fn: StepFn, intrinsic_fn: EdgeRewardFn, q_fn: QFn) -> tuple[int, dict[str, float]]:
         """Greedy root action argmax_a V(a) (ties to the lowest index).
 
         Returns:
