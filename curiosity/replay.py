@@ -59,6 +59,7 @@ class ReplayBuffer:
         self._oldest = 0
         self._size = 0
         self._next_frame = 0
+        self.total_added = 0  # transitions ever added; the oldest stored one has global index total_added - len
 
     def __len__(self) -> int:
         return self._size
@@ -96,6 +97,7 @@ class ReplayBuffer:
         self._term[phys] = bool(terminated)
         self._start[phys] = starts
         self._size += 1
+        self.total_added += 1
 
     def _encode(self, obs: np.ndarray) -> np.ndarray:
         obs = np.asarray(obs)
@@ -227,6 +229,23 @@ class ReplayBuffer:
         logical = np.arange(self._size)[start:stop]
         return self._decode(self._frames[self._frame_idx[self._phys(logical)]])
 
+    def _logical_of_global(self, index: np.ndarray) -> np.ndarray:
+        logical = np.asarray(index, dtype=np.int64) - (self.total_added - self._size)
+        if logical.size and (logical.min() < 0 or logical.max() >= self._size):
+            raise IndexError(
+                f"global transition indices {int(np.min(index))}..{int(np.max(index))} are not all stored (the buffer holds "
+                f"{self.total_added - self._size}..{self.total_added - 1}); raise replay_capacity"
+            )
+        return logical
+
+    def obs_at(self, index: np.ndarray) -> torch.Tensor:
+        """o_t of transitions by global index (0 = the first transition ever added): (M,) -> (M, *obs_shape)."""
+        return self._decode(self._frames[self._frame_idx[self._phys(self._logical_of_global(index))]])
+
+    def actions_at(self, index: np.ndarray) -> torch.Tensor:
+        """a_t of transitions by global index: (M,) -> (M,) long."""
+        return torch.from_numpy(self._act[self._phys(self._logical_of_global(index))])
+
     def all_actions(self, start: int = 0, stop: int | None = None) -> torch.Tensor:
         """Actions a_t of stored transitions, oldest first; (M,) long."""
         return torch.from_numpy(self._act[self._phys(np.arange(self._size)[start:stop])])
@@ -247,6 +266,7 @@ class ReplayBuffer:
             "rew": rew,
             "term": term,
             "start": self._start[self._phys(logical)],
+            "total_added": np.array(self.total_added, np.int64),
         }
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
@@ -259,3 +279,4 @@ class ReplayBuffer:
         for name in ("frame_idx", "act", "rew", "term", "start"):
             getattr(self, f"_{name}")[:size] = state[name]
         self._oldest, self._size, self._next_frame = 0, size, n_frames % self.frame_capacity
+        self.total_added = int(state["total_added"])

@@ -176,3 +176,17 @@ def test_empty_buffer_and_bad_shapes_raise():
         buffer.sample_transitions(1, np.random.default_rng(0))
     with pytest.raises(ValueError):
         buffer.add(np.zeros(3), 0, 0.0, np.zeros(2), False)
+
+
+def test_global_indices_survive_eviction() -> None:
+    buf = ReplayBuffer(capacity=4, obs_shape=(1,))
+    for t in range(6):
+        buf.add(np.array([float(t)], np.float32), t % 3, 0.0, np.array([float(t + 1)], np.float32), False)
+    assert buf.total_added == 6 and len(buf) == 4
+    assert buf.obs_at(np.array([2, 5]))[:, 0].tolist() == [2.0, 5.0]
+    assert buf.actions_at(np.array([2, 5])).tolist() == [2, 2]
+    with pytest.raises(IndexError, match="replay_capacity"):
+        buf.obs_at(np.array([1]))
+    restored = ReplayBuffer(capacity=4, obs_shape=(1,))
+    restored.load_state_dict(buf.state_dict())
+    assert restored.total_added == 6 and restored.obs_at(np.array([3]))[0, 0] == 3.0

@@ -31,6 +31,27 @@ class Kernel(Enum):
     yu = "yu"
 
 
+class NoveltyInput(Enum):
+    state_action = "state_action"
+    state = "state"
+
+
+class MemoryMode(Enum):
+    exact = "exact"
+    reservoir = "reservoir"
+
+
+class Average(Enum):
+    cumulative = "cumulative"
+    ema = "ema"
+
+
+class BandwidthRule(Enum):
+    fixed = "fixed"
+    median_nn = "median_nn"
+    scott = "scott"
+
+
 # ---------------------------------------------------------------- env
 @dataclass
 class EnvConfig:
@@ -104,14 +125,17 @@ class KDEBaseline(Enum):
     pointwise = "pointwise"
     zscore = "zscore"
     none = "none"
+    printed = "printed"
 
 
 @dataclass
 class KDEConfig:
     name: str = "kde"
     _target_: str = "curiosity.novelty.estimators.KDENovelty"
-    bandwidth: float = 1.0
+    bandwidth: float = 2.0
+    bandwidth_rule: BandwidthRule = BandwidthRule.median_nn
     baseline: KDEBaseline = KDEBaseline.scalar
+    standardise: bool = False
 
 
 @dataclass
@@ -119,9 +143,16 @@ class KNNConfig:
     name: str = "knn"
     _target_: str = "curiosity.novelty.estimators.KNNNovelty"
     k: int = 5
+    normalise: bool = True
 
 
 # ---------------------------------------------------------------- backward predictor
+@dataclass
+class OptimizerConfig:
+    _target_: str = "torch.optim.Adam"
+    lr: float = 5e-3
+
+
 @dataclass
 class BackwardConfig:
     name: str = MISSING
@@ -193,8 +224,33 @@ class Config:
     log_every: int = 10
     progress: bool = True
     method_label: str = "${baseline.label}"
-    # representation
+    # representation learning
     internal_dim: int = 4
+    n_step: int = 3
+    batch_size: int = 32
+    optimizer: Any = field(default_factory=OptimizerConfig)
+    transition_coef: float = 1.0
+    reward_coef: float = 1.0
+    transition_hidden: int = 10
+    transition_dropout: float = 0.5
+    normalised_transition: bool = False
+    detach_targets: bool = False  # the precursor does not detach; detached targets collapsed the latent here
+    replay_capacity: int = 1_000_000
+    # intrinsic reward
+    novelty_input: NoveltyInput = NoveltyInput.state_action
+    action_scale: float = 1.0
+    standardise_latents: bool = True
+    hybrid_alpha: float = 0.5
+    pe_average: Average = Average.cumulative
+    pe_eps: float = 1e-8
+    pe_dropout_samples: int = 8
+    memory_mode: MemoryMode = MemoryMode.exact
+    memory_size: int = 100_000
+    memory_refresh_every: int = 10
+    # Q learning (planner=qtree)
+    q_coef: float = 1.0
+    q_target_every: int = 1000
+    q_huber: bool = True
 
 
 _GROUP_SCHEMAS: dict[str, dict[str, type]] = {

@@ -21,6 +21,22 @@ RULES: list[Rule] = [
     ("threads", lambda v: v >= 1, "an integer >= 1"),
     ("log_every", lambda v: v >= 1, "an integer >= 1"),
     ("internal_dim", lambda v: v >= 1, "an integer >= 1"),
+    ("n_step", lambda v: v >= 1, "an integer >= 1"),
+    ("batch_size", lambda v: v >= 2, "an integer >= 2"),
+    ("optimizer.lr", lambda v: v > 0, "a learning rate > 0"),
+    ("transition_coef", lambda v: v >= 0, "a number >= 0"),
+    ("reward_coef", lambda v: v >= 0, "a number >= 0"),
+    ("transition_hidden", lambda v: v >= 1, "an integer >= 1"),
+    ("transition_dropout", lambda v: 0 <= v < 1, "a probability in [0, 1)"),
+    ("replay_capacity", lambda v: v >= 1, "an integer >= 1"),
+    ("action_scale", lambda v: v >= 0, "a number >= 0"),
+    ("hybrid_alpha", lambda v: 0 <= v <= 1, "a weight in [0, 1]"),
+    ("pe_eps", lambda v: v > 0, "a number > 0"),
+    ("pe_dropout_samples", lambda v: v >= 1, "an integer >= 1"),
+    ("memory_size", lambda v: v >= 1, "an integer >= 1"),
+    ("memory_refresh_every", lambda v: v >= 1, "an integer >= 1"),
+    ("q_coef", lambda v: v >= 0, "a number >= 0"),
+    ("q_target_every", lambda v: v >= 1, "an integer >= 1"),
     ("env.frame_size", lambda v: v >= 8, "an integer >= 8"),
     ("env.frame_stack", lambda v: v >= 1, "an integer >= 1"),
     ("env.state_dim", lambda v: v >= 1, "an integer >= 1"),
@@ -60,6 +76,8 @@ def _cross_field_errors(cfg: DictConfig) -> list[str]:
         errors.append("env.coverage_low, env.coverage_high, env.coverage_bins: must have one length")
     elif any(h <= lo for lo, h in zip(low, high, strict=True)):
         errors.append(f"env.coverage_high={high}: must be > env.coverage_low={low} in every dimension")
+    if cfg.budget.warmup_steps < cfg.n_step:
+        errors.append(f"budget.warmup_steps={cfg.budget.warmup_steps}: must be >= n_step={cfg.n_step} (segments to sample)")
     if cfg.budget.max_steps <= cfg.budget.warmup_steps:
         errors.append(
             f"budget.max_steps={cfg.budget.max_steps}: must be > budget.warmup_steps={cfg.budget.warmup_steps}"

@@ -31,6 +31,8 @@ class MPCPlanner:
         n_actions: A.
     """
 
+    uses_q = False  # whether the agent must train a Q-function for this planner
+
     def __init__(
         self,
         horizon: int = 5,

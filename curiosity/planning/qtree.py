@@ -30,6 +30,8 @@ class QTreePlanner:
         n_actions: A.
     """
 
+    uses_q = True  # whether the agent must train a Q-function for this planner
+
     def __init__(self, horizon: int = 5, gamma: float = 0.8, n_actions: int = 3) -> None:
         if horizon < 1:
             raise ValueError("horizon (the tree depth) must be >= 1")

@@ -1,0 +1,173 @@
+"""The ``estimator`` group: novelty estimators over a memory of embeddings, as the agents use them.
+
+An estimator is fitted to a memory (and, for KDE baselines, a random-phase reference) at each memory refresh, sees
+new memory rows in between through :meth:`set_memory` (cheap: statistics stay those of the last fit), and scores
+queries: ``reward = estimator(query)``, (B, D) -> (B,), higher for rarer queries.
+
+The latent scale drifts while the encoder trains (dispersion losses push latents apart), so bandwidths and distance
+scales can be relative to the memory's own spread, recomputed at every fit:
+``bandwidth_rule=median_nn``: h = bandwidth × median nearest-neighbour distance in the memory (exact duplicates
+left out);
+``bandwidth_rule=scott``: h = bandwidth × N^(−1/(D+4)) (Scott's rule; with ``standardise`` as in the precursor);
+``bandwidth_rule=fixed``: h = bandwidth.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import torch
+from torch import Tensor
+
+from curiosity.novelty.knn import knn_distance, nsrs_knn_score
+from curiosity.novelty.rewards import KDENoveltyReward
+
+BANDWIDTH_RULES = ("fixed", "median_nn", "scott")
+
+
+class _Standardiser:
+    """Per-dimension (x − mean) / std with the memory's statistics (identity when off)."""
+
+    def __init__(self, enabled: bool) -> None:
+        self.enabled = enabled
+        self.mean: Tensor | None = None
+        self.std: Tensor | None = None
+
+    def fit(self, memory: Tensor) -> None:
+        if self.enabled:
+            self.mean, self.std = memory.mean(0), memory.std(0, correction=0).clamp_min(1e-8)
+
+    def __call__(self, x: Tensor) -> Tensor:
+        if not self.enabled or self.mean is None or self.std is None:
+            return x
+        return (x - self.mean) / self.std
+
+
+class KDENovelty:
+    """KDE novelty: :class:`~curiosity.novelty.rewards.KDENoveltyReward` with a bandwidth rule.
+
+    Args:
+        bandwidth: h (``fixed``) or its multiplier (``median_nn``, ``scott``), > 0.
+        baseline: random-phase baseline of the reward (``scalar``, ``pointwise``, ``zscore``, ``none``, ``printed``).
+        bandwidth_rule: one of ``fixed``, ``median_nn``, ``scott``.
+        standardise: standardise every dimension by the memory's mean and std before the KDE (the precursor's way).
+    """
+
+    def __init__(self, bandwidth: float = 2.0, baseline: str = "scalar", bandwidth_rule: str = "median_nn",
+                 standardise: bool = False) -> None:  # fmt: skip
+        if bandwidth_rule not in BANDWIDTH_RULES:
+            raise ValueError(f"estimator.bandwidth_rule must be one of {BANDWIDTH_RULES}, got {bandwidth_rule!r}")
+        self.multiplier, self.rule = float(bandwidth), bandwidth_rule
+        self.reward = KDENoveltyReward(bandwidth=float(bandwidth), baseline=baseline)
+        self.standardiser = _Standardiser(standardise)
+
+    @property
+    def needs_reference(self) -> bool:
+        return self.reward.baseline in ("scalar", "pointwise", "printed")
+
+    def _bandwidth(self, memory: Tensor) -> float:
+        if self.rule == "fixed" or len(memory) < 2:
+            return self.multiplier
+        if self.rule == "scott":
+            return self.multiplier * len(memory) ** (-1.0 / (memory.shape[1] + 4))
+        nn = knn_distance(memory, memory, k=1, exclude_self=True)
+        nn = nn[nn > 0]  # exact duplicates (e.g. repeated frames) say nothing about the spacing
+        return self.multiplier * (float(nn.median()) if nn.numel() else 1.0)
+
+    @torch.no_grad()
+    def fit(self, memory: Tensor, reference: Tensor | None = None) -> None:
+        """Refit to ``memory`` (N, D): standardisation, bandwidth, baseline statistics (reference (M, D) if needed)."""
+        self.standardiser.fit(memory)
+        mem = self.standardiser(memory)
+        self.reward.bandwidth = self._bandwidth(mem)
+        if self.needs_reference:
+            if reference is None or len(reference) < 2:
+                raise ValueError(f"estimator.baseline={self.reward.baseline} needs the random-phase embeddings")
+            self.reward.set_reference(self.standardiser(reference))
+        self.reward.fit(mem)
+
+    def set_memory(self, memory: Tensor) -> None:
+        """Score against ``memory`` from now on, keeping the last fit's statistics."""
+        self.reward.memory = self.standardiser(memory).detach()
+
+    @torch.no_grad()
+    def __call__(self, query: Tensor) -> Tensor:
+        return self.reward(self.standardiser(query))
+
+    log_keys = ("intrinsic/bandwidth",)
+
+    @property
+    def logs(self) -> dict[str, float]:
+        return {"intrinsic/bandwidth": self.reward.bandwidth}
+
+    def state_dict(self) -> dict[str, Any]:
+        """Fitted statistics (bandwidth, standardisation, baseline); the memory itself comes from ``set_memory``."""
+        return {"bandwidth": self.reward.bandwidth, "reward": self.reward.state_dict(),
+                "mean": self.standardiser.mean, "std": self.standardiser.std}  # fmt: skip
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        self.reward.bandwidth = float(state["bandwidth"])
+        self.reward.load_state_dict(state["reward"])
+        self.standardiser.mean, self.standardiser.std = state["mean"], state["std"]
+
+
+class KNNNovelty:
+    """kNN novelty: mean Euclidean distance to the k nearest memory rows.
+
+    Args:
+        k: neighbours, ≥ 1.
+        normalise: divide by the memory's own mean kNN distance (leave-one-out) at the last fit, so the reward is
+            scale-free like the KDE one.
+    """
+
+    def __init__(self, k: int = 5, normalise: bool = True) -> None:
+        self.k, self.normalise = int(k), bool(normalise)
+        self.memory: Tensor | None = None
+        self.scale = 1.0
+
+    def fit(self, memory: Tensor, reference: Tensor | None = None) -> None:
+        """Refit to ``memory`` (N, D) (``reference`` is unused)."""
+        self.set_memory(memory)
+        if self.normalise and len(memory) > self.k:
+            self.scale = max(float(knn_distance(memory, memory, k=self.k, exclude_self=True).mean()), 1e-8)
+
+    def set_memory(self, memory: Tensor) -> None:
+        self.memory = memory.detach()
+
+    @torch.no_grad()
+    def __call__(self, query: Tensor) -> Tensor:
+        if self.memory is None:
+            raise RuntimeError("fit(memory) before scoring")
+        k = min(self.k, len(self.memory))
+        return knn_distance(query, self.memory, k=k) / self.scale
+
+    log_keys = ("intrinsic/knn_scale",)
+
+    @property
+    def logs(self) -> dict[str, float]:
+        return {"intrinsic/knn_scale": self.scale}
+
+    def state_dict(self) -> dict[str, Any]:
+        return {"scale": self.scale}
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        self.scale = float(state["scale"])
+
+
+class NSRSKNNNovelty(KNNNovelty):
+    """NSRS's score: mean of the 2nd..k-th smallest squared distances to the memory (no normalisation)."""
+
+    def __init__(self, k: int = 5) -> None:
+        super().__init__(k=k, normalise=False)
+
+    @torch.no_grad()
+    def __call__(self, query: Tensor) -> Tensor:
+        if self.memory is None:
+            raise RuntimeError("fit(memory) before scoring")
+        return nsrs_knn_score(query, self.memory, k=min(self.k, len(self.memory)))
+
+    log_keys = ()
+
+    @property
+    def logs(self) -> dict[str, float]:
+        return {}
