@@ -58,6 +58,8 @@ class ICM(IntrinsicReward):
         scale: Multiplier applied by :meth:`IntrinsicReward.__call__`.
     """
 
+    log_keys = ("losses/icm_inverse", "losses/icm_forward")
+
     def __init__(
         self,
         encoder: nn.Module,

@@ -54,6 +54,8 @@ class RND(IntrinsicReward):
         observe_in_update: Whether :meth:`update` calls :meth:`observe` on its batch before the predictor step.
     """
 
+    log_keys = ("losses/rnd",)
+
     def __init__(
         self,
         target: nn.Module,

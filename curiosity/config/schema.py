@@ -136,6 +136,7 @@ class KDEConfig:
     bandwidth_rule: BandwidthRule = BandwidthRule.median_nn
     baseline: KDEBaseline = KDEBaseline.scalar
     standardise: bool = False
+    self_in_reference: bool = False
 
 
 @dataclass
@@ -147,12 +148,6 @@ class KNNConfig:
 
 
 # ---------------------------------------------------------------- backward predictor
-@dataclass
-class OptimizerConfig:
-    _target_: str = "torch.optim.Adam"
-    lr: float = 5e-3
-
-
 @dataclass
 class BackwardConfig:
     name: str = MISSING
@@ -193,6 +188,23 @@ class AgentConfig:
     _target_: str = MISSING
 
 
+@dataclass
+class QAgentConfig(AgentConfig):
+    """ICM / RND: greedy double DQN on r_ext + r_int from ``intrinsic`` (a partial taking ``obs_shape``)."""
+
+    intrinsic: Any = MISSING
+    epsilon: float = 0.0
+    gamma: float = 0.8
+
+
+@dataclass
+class NSRSConfig(AgentConfig):
+    """NSRS: the paper's agent with NSRS's own parts, ``settings`` replacing those nodes of the run config."""
+
+    _recursive_: bool = False
+    settings: Any = MISSING
+
+
 # ---------------------------------------------------------------- budget
 @dataclass
 class BudgetConfig:
@@ -228,7 +240,7 @@ class Config:
     internal_dim: int = 4
     n_step: int = 3
     batch_size: int = 32
-    optimizer: Any = field(default_factory=OptimizerConfig)
+    optimizer: Any = field(default_factory=lambda: {"_target_": "torch.optim.Adam", "lr": 5e-3})
     transition_coef: float = 1.0
     reward_coef: float = 1.0
     transition_hidden: int = 10
@@ -265,7 +277,7 @@ _GROUP_SCHEMAS: dict[str, dict[str, type]] = {
     "estimator": {"kde": KDEConfig, "knn": KNNConfig},
     "backward": {"backward": BackwardConfig},
     "planner": {"mpc": MPCConfig, "qtree": QTreeConfig},
-    "baseline": {"agent": AgentConfig},
+    "baseline": {"agent": AgentConfig, "q_agent": QAgentConfig, "nsrs": NSRSConfig},
     "budget": {"budget": BudgetConfig},
 }
 

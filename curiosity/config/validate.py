@@ -23,7 +23,7 @@ RULES: list[Rule] = [
     ("internal_dim", lambda v: v >= 1, "an integer >= 1"),
     ("n_step", lambda v: v >= 1, "an integer >= 1"),
     ("batch_size", lambda v: v >= 2, "an integer >= 2"),
-    ("optimizer.lr", lambda v: v > 0, "a learning rate > 0"),
+    ("optimizer.lr", lambda v: isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0, "a learning rate > 0"),
     ("transition_coef", lambda v: v >= 0, "a number >= 0"),
     ("reward_coef", lambda v: v >= 0, "a number >= 0"),
     ("transition_hidden", lambda v: v >= 1, "an integer >= 1"),

@@ -17,6 +17,8 @@ class IntrinsicReward(abc.ABC):
     ``__call__`` returns ``scale * compute(batch)``.
     """
 
+    log_keys: tuple[str, ...] = ()  # every key update() may return (they become metrics.csv columns)
+
     def __init__(self, scale: float = 1.0) -> None:
         self.scale = float(scale)
 
@@ -31,6 +33,9 @@ class IntrinsicReward(abc.ABC):
     @abc.abstractmethod
     def update(self, batch: TransitionBatch) -> dict[str, float]:
         """One training update on ``batch``; returns logged scalars such as ``{"losses/icm_inverse": 1.09}``."""
+
+    def observe(self, batch: TransitionBatch) -> None:  # noqa: B027 (an optional hook, not abstract)
+        """Fold freshly experienced transitions, in time order, into running statistics (default: none kept)."""
 
     def __call__(self, batch: TransitionBatch) -> Tensor:
         return self.scale * self.compute(batch)

@@ -1,0 +1,25 @@
+"""The NSRS baseline (Tao et al. 2020) as nsrs-protocol.md §3–§5 describes its code, with the subtree fix.
+
+NSRS is the paper's agent with NSRS's own parts: kNN novelty of latent states (squared distances, nearest dropped),
+Gaussian-potential dispersion, a 1-step transition loss, double DQN on extrinsic + intrinsic reward with TD into the
+encoder, and the exhaustive depth-5 tree planner with Q at the leaves. Those settings (``baseline.settings``) are
+applied over the run config, so the ``entropy``/``estimator``/``planner`` groups do not change the baseline.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from omegaconf import DictConfig, OmegaConf
+
+from curiosity.agents.paper import PaperAgent
+
+
+class NSRSAgent(PaperAgent):
+    """:class:`PaperAgent` built from the run config with ``settings`` merged over it."""
+
+    def __init__(self, cfg: DictConfig, settings: DictConfig | dict[str, Any]) -> None:
+        resolved = OmegaConf.create(OmegaConf.to_container(cfg, resolve=True))
+        for key, value in OmegaConf.to_container(OmegaConf.create(settings), resolve=True).items():
+            resolved[key] = value  # whole nodes are replaced, not merged: NSRS's parts are not the groups' options
+        super().__init__(resolved)
