@@ -165,7 +165,7 @@ class MPCConfig:
     _target_: str = "curiosity.planning.mpc.MPCPlanner"
     horizon: int = 3
     gamma: float = 0.9
-    temperature: float = 0.1
+    temperature: float = 0.02
     eta: float = 1.0
     max_candidates: int = 243
     n_actions: int = "${env.n_actions}"  # type: ignore[assignment]
@@ -238,7 +238,7 @@ class Config:
     method_label: str = "${baseline.label}"
     # representation learning
     internal_dim: int = 4
-    n_step: int = 3
+    n_step: int = 2
     batch_size: int = 32
     optimizer: Any = field(default_factory=lambda: {"_target_": "torch.optim.Adam", "lr": 5e-3})
     transition_coef: float = 1.0
@@ -249,7 +249,7 @@ class Config:
     detach_targets: bool = False  # the precursor does not detach; detached targets collapsed the latent here
     replay_capacity: int = 1_000_000
     # intrinsic reward
-    novelty_input: NoveltyInput = NoveltyInput.state_action
+    novelty_input: NoveltyInput = NoveltyInput.state  # measured: better than state_action here (README)
     action_scale: float = 1.0
     standardise_latents: bool = True
     hybrid_alpha: float = 0.5
