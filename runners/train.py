@@ -13,6 +13,7 @@ from omegaconf import DictConfig
 
 from curiosity.config import setup
 from curiosity.config.ranges import RangeError, expand_ranges
+from curiosity.runtime.callbacks import LAST_SWEEP, REPORT, report_failures
 from curiosity.runtime.loop import run
 
 setup()
@@ -32,7 +33,15 @@ def cli() -> None:
     except RangeError as err:
         print(f"error: {err}", file=sys.stderr)
         raise SystemExit(2) from err
-    main()
+    try:
+        main()
+    except SystemExit as exit_:
+        if exit_.code and LAST_SWEEP:
+            failed = report_failures(LAST_SWEEP["dir"], LAST_SWEEP["start"])
+            if failed:
+                print(f"error: {len(failed)} job(s) of this sweep failed (also in {LAST_SWEEP['dir'] / REPORT}):",
+                      *failed, sep="\n  ", file=sys.stderr)  # fmt: skip
+        raise
 
 
 if __name__ == "__main__":

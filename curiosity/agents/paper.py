@@ -17,7 +17,7 @@ from omegaconf import DictConfig
 from curiosity.agents.base import Agent
 from curiosity.agents.curiosity import CURIOSITY_KEYS, LatentCuriosity
 from curiosity.agents.q_learning import QLearner
-from curiosity.agents.representation import LOSS_KEYS, LossWeights, encode_segments, representation_loss
+from curiosity.agents.representation import LOSS_KEYS, LossWeights, check_finite, encode_segments, representation_loss
 from curiosity.agents.schedule import TrainSchedule
 from curiosity.agents.world_model import WorldModel
 from curiosity.config.build import build, choice
@@ -95,6 +95,7 @@ class PaperAgent(Agent):
         start = time.perf_counter()
         with self.model.evaluating():
             z0 = self.model.encode(torch.as_tensor(obs).unsqueeze(0))[0]
+            check_finite("latent", z0)
             action, info = self._plan(z0)
         score = info.get("chosen_score", info.get("best_value", 0.0))
         self._plan_logs = {"planner/score": score, "planner/entropy": info.get("entropy", 0.0),
@@ -107,6 +108,7 @@ class PaperAgent(Agent):
         self.replay.add(obs, action, reward, next_obs, terminated)
         with self.model.evaluating():
             z = self.model.encode(torch.as_tensor(np.stack([obs, next_obs])))
+        check_finite("latent", z)
         cur, a = self.curiosity, torch.tensor([action])
         cur.add(z[0], action, self.replay.total_added - 1)
         logs: dict[str, float] = dict(self._plan_logs)
@@ -155,8 +157,10 @@ class PaperAgent(Agent):
             z, z_next, act = enc.z[:, 0], enc.z[:, 1], seg.act[:, 0]
             r_int, _ = self.curiosity.from_latents(z.detach(), act, z_next.detach())
             q_loss = self.q.loss(z, act, seg.rewards[:, 0] + r_int, z_next, seg.obs[:, 1], seg.terminateds[:, 0])
+            check_finite("losses/q", q_loss)
             loss = loss + self.cfg.q_coef * q_loss
             logs["losses/q"] = q_loss.item()
+        check_finite("losses/total", loss)
         self.optimizer.zero_grad(set_to_none=True)
         loss.backward()
         self.optimizer.step()

@@ -19,6 +19,7 @@ from omegaconf import DictConfig
 from curiosity.agents.base import Agent
 from curiosity.agents.paper import obs_shape_of
 from curiosity.agents.q_learning import QLearner
+from curiosity.agents.representation import check_finite
 from curiosity.agents.schedule import TrainSchedule
 from curiosity.config.build import build, choice
 from curiosity.intrinsic.base import IntrinsicReward
@@ -89,6 +90,7 @@ class IntrinsicQAgent(Agent):
             z_next = self.encoder(batch.next_obs)
         loss = self.q.loss(self.encoder(batch.obs), batch.act, batch.rewards + r_int, z_next, batch.next_obs,
                            batch.terminateds)  # fmt: skip
+        check_finite("losses/q", loss)
         self.optimizer.zero_grad(set_to_none=True)
         loss.backward()
         self.optimizer.step()

@@ -48,6 +48,12 @@ class QLearner(nn.Module):
             self.target_q.load_state_dict(self.q.state_dict())
             self.target_encoder.load_state_dict(self._encoder[0].state_dict())
 
+    def get_extra_state(self) -> dict[str, int]:
+        return {"updates": self.updates}
+
+    def set_extra_state(self, state: dict[str, int]) -> None:
+        self.updates = int(state["updates"])
+
     def values(self, z: Tensor) -> Tensor:
         """Q(z, ·): (N, d) -> (N, A)."""
         return self.q(z)

@@ -10,6 +10,7 @@ import torch
 from torch import Tensor
 
 from curiosity.agents.world_model import WorldModel
+from curiosity.errors import NumericalFault
 from curiosity.info.backward import backward_predictor_nll
 from curiosity.losses.model import nstep_backward_loss, nstep_reward_loss, nstep_transition_loss
 from curiosity.nets.onehot import one_hot
@@ -18,6 +19,12 @@ from curiosity.types import SegmentBatch
 Regulariser = Callable[[Tensor, Tensor, Tensor], tuple[Tensor, dict[str, float]]]
 
 LOSS_KEYS = ("losses/transition", "losses/entropy", "losses/reward", "losses/backward", "losses/total", "info/gram_offdiag")
+
+
+def check_finite(term: str, value: Tensor) -> None:
+    """Raise :class:`~curiosity.errors.NumericalFault` naming ``term`` if ``value`` holds a NaN or an Inf."""
+    if not bool(torch.isfinite(value).all()):
+        raise NumericalFault(term, "nan" if bool(torch.isnan(value).any()) else "inf")
 
 
 @dataclass
@@ -58,17 +65,21 @@ def representation_loss(
     targets = z[:, 1:].detach() if w.detach_targets else z[:, 1:]
     l_trans = nstep_transition_loss(z[:, 0], a1h, targets, seg.terminateds, model.transition,
                                     normalised=w.normalised_transition)  # fmt: skip
+    check_finite("losses/transition", l_trans)
     l_reg, logs = regulariser(z[:, 0], a1h[:, 0], z[:, 1])
+    check_finite("losses/entropy", l_reg)
     total = w.transition * l_trans + l_reg
     logs = {"losses/transition": l_trans.item(), **logs}
     if w.reward > 0 and model.reward_model is not None:
         l_r = nstep_reward_loss(z[:, :-1], a1h, seg.rewards, seg.terminateds, model.reward_model)
+        check_finite("losses/reward", l_r)
         total = total + w.reward * l_r
         logs["losses/reward"] = l_r.item()
     if w.backward > 0 and model.backward is not None:
         y = torch.cat([z[:, :-1], a1h], dim=2)
         nll = partial(backward_predictor_nll, sigma_b=w.sigma_b)
         l_b = nstep_backward_loss(y, z[:, 1:], seg.terminateds, model.backward, nll)
+        check_finite("losses/backward", l_b)
         total = total + w.backward * l_b
         logs["losses/backward"] = l_b.item()
     logs["losses/total"] = total.item()

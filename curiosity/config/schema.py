@@ -235,6 +235,8 @@ class Config:
     threads: int = 1
     log_every: int = 10
     progress: bool = True
+    resume: bool = True  # re-running the same command on an existing run directory resumes its checkpoint
+    checkpoint_every: int = 500  # env steps between checkpoints (also written at the end and on SIGTERM/SIGINT)
     method_label: str = "${baseline.label}"
     # representation learning
     internal_dim: int = 4

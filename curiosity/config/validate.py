@@ -20,6 +20,7 @@ RULES: list[Rule] = [
     ("seed", lambda v: v >= 0, "an integer >= 0"),
     ("threads", lambda v: v >= 1, "an integer >= 1"),
     ("log_every", lambda v: v >= 1, "an integer >= 1"),
+    ("checkpoint_every", lambda v: v >= 1, "an integer >= 1"),
     ("internal_dim", lambda v: v >= 1, "an integer >= 1"),
     ("n_step", lambda v: v >= 1, "an integer >= 1"),
     ("batch_size", lambda v: v >= 2, "an integer >= 2"),
@@ -76,6 +77,9 @@ def _cross_field_errors(cfg: DictConfig) -> list[str]:
         errors.append("env.coverage_low, env.coverage_high, env.coverage_bins: must have one length")
     elif any(h <= lo for lo, h in zip(low, high, strict=True)):
         errors.append(f"env.coverage_high={high}: must be > env.coverage_low={low} in every dimension")
+    k = OmegaConf.select(cfg, "estimator.k", default=None)
+    if k is not None and k >= cfg.budget.warmup_steps:
+        errors.append(f"estimator.k={k}: must be < budget.warmup_steps={cfg.budget.warmup_steps} (the first memory)")
     if cfg.budget.warmup_steps < cfg.n_step:
         errors.append(f"budget.warmup_steps={cfg.budget.warmup_steps}: must be >= n_step={cfg.n_step} (segments to sample)")
     if cfg.budget.max_steps <= cfg.budget.warmup_steps:

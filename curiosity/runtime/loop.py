@@ -1,10 +1,13 @@
-"""The env-step loop of one run: warm-up, act, observe, log, summarise."""
+"""The env-step loop of one run: warm-up, act, observe, log, checkpoint, resume, summarise."""
 
 from __future__ import annotations
 
+import json
 import logging
+import signal
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from hydra.utils import get_object
@@ -14,6 +17,9 @@ from tqdm import tqdm
 from curiosity.agents.base import Agent
 from curiosity.config import ConfigError, build, validate
 from curiosity.envs import GridCoverage, make_env, physical_state
+from curiosity.envs.state import env_state, restore_env
+from curiosity.errors import NumericalFault, RunDirectoryError
+from curiosity.runtime.checkpoint import RunLock, load_checkpoint, rng_states, save_checkpoint, set_rng_states
 from curiosity.runtime.logger import RunLogger
 from curiosity.runtime.seeding import seed_everything
 from curiosity.runtime.summary import RunSummary, git_commit
@@ -21,6 +27,12 @@ from curiosity.runtime.summary import RunSummary, git_commit
 log = logging.getLogger(__name__)
 
 CHART_KEYS = ("charts/coverage", "charts/wall_time", "charts/sps", "charts/extrinsic_reward", "intrinsic/reward")
+# Keys that do not change what a run computes: a run may resume with other values of them.
+VOLATILE_KEYS = ("progress", "threads", "resume", "checkpoint_every")
+
+
+class Interrupted(RuntimeError):
+    """The run was stopped by a signal after writing a checkpoint; re-run the same command to resume it."""
 
 
 def check_built(cfg: DictConfig) -> None:
@@ -32,26 +44,58 @@ def check_built(cfg: DictConfig) -> None:
         raise ConfigError(f"baseline={cfg.baseline.name}: {target} is not built yet ({err})") from err
 
 
-def run(cfg: DictConfig, run_dir: str | Path) -> RunSummary:
-    """Run one experiment into ``run_dir`` and return its summary.
+def identity(cfg: DictConfig) -> dict[str, Any]:
+    """The resolved config without :data:`VOLATILE_KEYS`: two runs with equal identities compute the same thing."""
+    container = OmegaConf.to_container(cfg, resolve=True, enum_to_str=True)
+    assert isinstance(container, dict)
+    return {k: v for k, v in container.items() if k not in VOLATILE_KEYS}
 
-    Validates the config before anything is built, seeds everything, builds the env and the agent, then steps the
-    one continuing episode until the goal or ``budget.max_steps``. The first ``budget.warmup_steps`` actions are
-    uniformly random; every step counts towards steps-to-goal.
+
+def _differences(saved: dict[str, Any], now: dict[str, Any], prefix: str = "") -> list[str]:
+    out = []
+    for key in sorted(set(saved) | set(now)):
+        a, b = saved.get(key), now.get(key)
+        if isinstance(a, dict) and isinstance(b, dict):
+            out += _differences(a, b, f"{prefix}{key}.")
+        elif a != b:
+            out.append(f"{prefix}{key}: {a!r} there, {b!r} now")
+    return out
+
+
+def _existing_checkpoint(cfg: DictConfig, run_dir: Path) -> dict[str, Any] | None:
+    """The checkpoint to resume from, None for a fresh directory; refuses anything else."""
+    ckpt = load_checkpoint(run_dir)
+    if ckpt is None:
+        if (run_dir / "metrics.csv").exists():
+            raise RunDirectoryError(f"{run_dir} already holds a run without a checkpoint; it is not overwritten "
+                                    "(use another run directory)")  # fmt: skip
+        return None
+    if not cfg.resume:
+        raise RunDirectoryError(f"{run_dir} holds a checkpoint at step {ckpt['step']}; resume=false refuses to "
+                                "overwrite it (use another run directory, or resume=true)")  # fmt: skip
+    diff = _differences(ckpt["config"], identity(cfg))
+    if diff:
+        raise RunDirectoryError(f"{run_dir} holds a run of another configuration; not resuming it: " + "; ".join(diff[:5]))
+    return ckpt
+
+
+def run(cfg: DictConfig, run_dir: str | Path) -> RunSummary:
+    """Run one experiment into ``run_dir`` (resuming it from its checkpoint if there is one) and return its summary.
+
+    Validates the config before anything is built. The first ``budget.warmup_steps`` actions are uniformly random;
+    every step counts towards steps-to-goal. A checkpoint is written every ``checkpoint_every`` env steps, at the end,
+    and on SIGTERM/SIGINT; re-running the same command resumes from it.
     """
     validate(cfg)
     check_built(cfg)
-    seed_everything(cfg.seed, deterministic=cfg.deterministic, threads=cfg.threads)
-    env = make_env(cfg.env, cfg.budget.max_steps)
-    agent: Agent = build(cfg.baseline, cfg=cfg)
-    logger = RunLogger(run_dir, [*CHART_KEYS, *agent.metric_keys])
-    logger.text("config", "```yaml\n" + OmegaConf.to_yaml(cfg, resolve=True) + "```")
-    try:
-        summary = _loop(cfg, env, agent, logger)
-    finally:
-        logger.close()
-        env.close()
-    summary.write(run_dir)
+    run_dir = Path(run_dir)
+    with RunLock(run_dir):
+        ckpt = _existing_checkpoint(cfg, run_dir)
+        if ckpt is not None and ckpt["finished"]:
+            summary = RunSummary(**json.loads((run_dir / "summary.json").read_text()))
+            log.info("%s seed=%d: already complete in %s", summary.method, summary.seed, run_dir)
+            return summary
+        summary = _Run(cfg, run_dir, ckpt).execute()
     goal = f"goal at step {summary.steps_to_goal}" if summary.reached_goal else "goal not reached"
     log.info(
         "%s seed=%d %s: %s (cap %d), coverage %.4f, %.1f s, %.0f steps/s -> %s",
@@ -61,41 +105,129 @@ def run(cfg: DictConfig, run_dir: str | Path) -> RunSummary:
     return summary
 
 
-def _loop(cfg: DictConfig, env, agent: Agent, logger: RunLogger) -> RunSummary:
-    budget = cfg.budget
-    rng = np.random.default_rng(cfg.seed)
-    coverage = GridCoverage(cfg.env.coverage_low, cfg.env.coverage_high, cfg.env.coverage_bins)
-    obs, _ = env.reset(seed=cfg.seed)
-    env.action_space.seed(cfg.seed)
-    coverage.update(physical_state(env))
-    steps_to_goal, step = None, 0
-    start = time.perf_counter()
-    bar = tqdm(total=budget.max_steps, unit="step", desc=f"{cfg.method_label} seed={cfg.seed}", disable=not cfg.progress)
-    for step in range(budget.max_steps):
-        action = int(rng.integers(env.action_space.n)) if step < budget.warmup_steps else agent.act(obs, step)
-        next_obs, reward, terminated, _, _ = env.step(action)
-        logger.record_many(agent.observe(obs, action, float(reward), next_obs, bool(terminated), step))
-        logger.record("charts/extrinsic_reward", float(reward))
-        coverage.update(physical_state(env))
-        obs = next_obs
-        done = bool(terminated) or step + 1 == budget.max_steps
-        if (step + 1) % cfg.log_every == 0 or done:
-            elapsed = time.perf_counter() - start
-            logger.record_many(
-                {"charts/coverage": coverage.fraction, "charts/wall_time": elapsed, "charts/sps": (step + 1) / elapsed}
-            )
-            logger.dump(step + 1)
-            bar.set_postfix(coverage=f"{coverage.fraction:.4f}", refresh=False)
-            bar.update((step + 1) - bar.n)
-        if terminated:
-            steps_to_goal = step + 1
-            break
-    bar.close()
-    wall = time.perf_counter() - start
-    commit, dirty = git_commit()
-    return RunSummary(
-        method=cfg.method_label, seed=int(cfg.seed), env=cfg.env.id, steps_to_goal=steps_to_goal,
-        reached_goal=steps_to_goal is not None, env_steps=step + 1, max_steps=budget.max_steps,
-        warmup_steps=budget.warmup_steps, final_coverage=coverage.fraction, wall_seconds=wall,
-        steps_per_second=(step + 1) / wall, git_commit=commit, git_dirty=dirty,
-    )  # fmt: skip
+class _Run:
+    """The state of one run in progress: env, agent, logger, coverage and the loop's own counters."""
+
+    def __init__(self, cfg: DictConfig, run_dir: Path, ckpt: dict[str, Any] | None) -> None:
+        self.cfg, self.run_dir = cfg, run_dir
+        seed_everything(cfg.seed, deterministic=cfg.deterministic, threads=cfg.threads)
+        self.env = make_env(cfg.env, cfg.budget.max_steps)
+        self.agent: Agent = build(cfg.baseline, cfg=cfg)
+        self.coverage = GridCoverage(cfg.env.coverage_low, cfg.env.coverage_high, cfg.env.coverage_bins)
+        self.rng = np.random.default_rng(cfg.seed)
+        self.step, self.steps_to_goal, self.wall_before = 0, None, 0.0
+        self.stop_signal: int | None = None
+        columns = [*CHART_KEYS, *self.agent.metric_keys]
+        if ckpt is None:
+            self.obs, _ = self.env.reset(seed=cfg.seed)
+            self.env.action_space.seed(cfg.seed)
+            self.coverage.update(physical_state(self.env))
+            self.logger = RunLogger(run_dir, columns)
+            self.logger.text("config", "```yaml\n" + OmegaConf.to_yaml(cfg, resolve=True) + "```")
+            self.save(finished=False)  # step 0: a killed run always has something to resume from
+        else:
+            self._restore(ckpt, columns)
+
+    def _restore(self, ckpt: dict[str, Any], columns: list[str]) -> None:
+        restore_env(self.env, ckpt["env"], self.cfg.seed)
+        self.agent.load_state_dict(ckpt["agent"])
+        self.coverage.load_state_dict(ckpt["coverage"])
+        self.rng.bit_generator.state = ckpt["loop_rng"]
+        set_rng_states(ckpt["rng"])
+        self.obs, self.step, self.steps_to_goal = ckpt["obs"], int(ckpt["step"]), ckpt["steps_to_goal"]
+        self.wall_before = float(ckpt["wall_seconds"])
+        self.logger = RunLogger(self.run_dir, columns, resume=ckpt["logger"])
+        log.info("resuming %s from its checkpoint at env step %d", self.run_dir, self.step)
+
+    def save(self, finished: bool) -> None:
+        """Checkpoint everything the rest of the run depends on (atomically)."""
+        save_checkpoint(self.run_dir, {
+            "config": identity(self.cfg), "step": self.step, "finished": finished, "obs": self.obs,
+            "steps_to_goal": self.steps_to_goal, "env": env_state(self.env), "agent": self.agent.state_dict(),
+            "coverage": self.coverage.state_dict(), "loop_rng": self.rng.bit_generator.state, "rng": rng_states(),
+            "logger": self.logger.state_dict(), "wall_seconds": self._wall(),
+        })  # fmt: skip
+
+    def _wall(self) -> float:
+        return self.wall_before + (time.perf_counter() - self._start if hasattr(self, "_start") else 0.0)
+
+    def _on_signal(self, signum: int, frame: object) -> None:
+        self.stop_signal = signum
+
+    def execute(self) -> RunSummary:
+        self._start = time.perf_counter()
+        handlers = {}
+        for sig in (signal.SIGTERM, signal.SIGINT):
+            try:
+                handlers[sig] = signal.signal(sig, self._on_signal)
+            except ValueError:  # not the main thread: no signal handling
+                pass
+        try:
+            self._loop()
+            summary = self._summary()
+            summary.write(self.run_dir)
+            self.save(finished=True)
+        finally:
+            for sig, handler in handlers.items():
+                signal.signal(sig, handler)
+            self.logger.close()
+            self.env.close()
+        return summary
+
+    def _loop(self) -> None:
+        cfg, budget = self.cfg, self.cfg.budget
+        bar = tqdm(total=budget.max_steps, initial=self.step, unit="step", desc=f"{cfg.method_label} seed={cfg.seed}",
+                   disable=not cfg.progress)  # fmt: skip
+        try:
+            while self.step < budget.max_steps and self.steps_to_goal is None:
+                try:
+                    terminated = self._step()
+                except NumericalFault as fault:  # stop; keep the last good checkpoint; no NaN row was written
+                    raise NumericalFault(f"{fault.term}", fault.value, self.step + 1) from None
+                self.step += 1
+                if terminated:
+                    self.steps_to_goal = self.step
+                done = terminated or self.step == budget.max_steps
+                if self.step % cfg.log_every == 0 or done:
+                    self._dump()
+                    bar.set_postfix(coverage=f"{self.coverage.fraction:.4f}", refresh=False)
+                    bar.update(self.step - bar.n)
+                if self.step % cfg.checkpoint_every == 0 and not done:
+                    self.save(finished=False)
+                if self.stop_signal is not None and not done:
+                    self.save(finished=False)
+                    raise Interrupted(f"signal {self.stop_signal} at env step {self.step}: checkpoint written to "
+                                      f"{self.run_dir}; run the same command again to resume")  # fmt: skip
+        finally:
+            bar.close()
+
+    def _step(self) -> bool:
+        """One env step (``self.step`` is its 0-based index); returns whether it reached the goal."""
+        step = self.step
+        if step < self.cfg.budget.warmup_steps:
+            action = int(self.rng.integers(self.env.action_space.n))
+        else:
+            action = self.agent.act(self.obs, step)
+        next_obs, reward, terminated, _, _ = self.env.step(action)
+        self.logger.record_many(self.agent.observe(self.obs, action, float(reward), next_obs, bool(terminated), step))
+        self.logger.record("charts/extrinsic_reward", float(reward))
+        self.coverage.update(physical_state(self.env))
+        self.obs = next_obs
+        return bool(terminated)
+
+    def _dump(self) -> None:
+        elapsed = self._wall()
+        self.logger.record_many({"charts/coverage": self.coverage.fraction, "charts/wall_time": elapsed,
+                                 "charts/sps": self.step / max(elapsed, 1e-9)})  # fmt: skip
+        self.logger.dump(self.step)
+
+    def _summary(self) -> RunSummary:
+        wall = self._wall()
+        commit, dirty = git_commit()
+        budget = self.cfg.budget
+        return RunSummary(
+            method=self.cfg.method_label, seed=int(self.cfg.seed), env=self.cfg.env.id, steps_to_goal=self.steps_to_goal,
+            reached_goal=self.steps_to_goal is not None, env_steps=self.step, max_steps=budget.max_steps,
+            warmup_steps=budget.warmup_steps, final_coverage=self.coverage.fraction, wall_seconds=wall,
+            steps_per_second=self.step / max(wall, 1e-9), git_commit=commit, git_dirty=dirty,
+        )  # fmt: skip

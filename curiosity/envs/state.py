@@ -1,0 +1,40 @@
+"""Save and restore the full state of a wrapped classic-control env (for checkpoints)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium.wrappers import FrameStackObservation, TimeLimit
+
+
+def _wrappers(env: gym.Env):
+    while isinstance(env, gym.Wrapper):
+        yield env
+        env = env.env
+
+
+def env_state(env: gym.Env) -> dict[str, Any]:
+    """Physical state, the env's RNG, stacked frames and the time-limit counter."""
+    state: dict[str, Any] = {"physical": np.array(env.unwrapped.state, dtype=np.float64),
+                             "np_random": env.unwrapped.np_random.bit_generator.state}  # fmt: skip
+    for w in _wrappers(env):
+        if isinstance(w, FrameStackObservation):
+            state["frames"] = [np.array(f, copy=True) for f in w.obs_queue]
+        elif isinstance(w, TimeLimit):
+            state["elapsed"] = w._elapsed_steps
+    return state
+
+
+def restore_env(env: gym.Env, state: dict[str, Any], seed: int) -> None:
+    """Bring a freshly built ``env`` to ``state`` (resets it first so every wrapper is initialised)."""
+    env.reset(seed=seed)
+    env.unwrapped.state = np.array(state["physical"], dtype=np.float64)
+    env.unwrapped.np_random.bit_generator.state = state["np_random"]
+    for w in _wrappers(env):
+        if isinstance(w, FrameStackObservation):
+            w.obs_queue.clear()
+            w.obs_queue.extend(np.array(f, copy=True) for f in state["frames"])
+        elif isinstance(w, TimeLimit):
+            w._elapsed_steps = state["elapsed"]

@@ -1,0 +1,61 @@
+"""Hydra callbacks: a sweep lists its failed jobs with their run directories.
+
+Hydra goes on with the other jobs when one fails and exits non-zero at the end; it does not say which jobs failed.
+Each failed job leaves ``FAILED.json`` (error and overrides) in its run directory (a job that succeeds removes one an
+earlier failure left), and :func:`report_failures` lists this sweep's failures on the console and in
+``<sweep dir>/failed_jobs.txt`` (called by ``runners.train`` when the sweep exits non-zero).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import time
+from pathlib import Path
+from typing import Any
+
+from hydra.core.utils import JobReturn, JobStatus
+from hydra.experimental.callback import Callback
+from omegaconf import DictConfig
+
+log = logging.getLogger(__name__)
+
+MARKER = "FAILED.json"
+REPORT = "failed_jobs.txt"
+LAST_SWEEP: dict[str, Any] = {}  # the sweep of this process: {"dir": Path, "start": float}
+
+
+def report_failures(sweep_dir: Path, since: float = 0.0) -> list[str]:
+    """Lines ``<run dir>  [overrides]  error`` for the jobs of ``sweep_dir`` that failed after ``since``."""
+    lines = []
+    for marker in sorted(sweep_dir.rglob(MARKER)):
+        if marker.stat().st_mtime < since:
+            continue
+        info = json.loads(marker.read_text())
+        lines.append(f"{marker.parent}  [{' '.join(info['overrides'])}]  {' '.join(info['error'].split())}")
+    report = sweep_dir / REPORT
+    if lines:
+        report.write_text("\n".join(lines) + "\n")
+    else:
+        report.unlink(missing_ok=True)
+    return lines
+
+
+class FailureReport(Callback):
+    """Marks failed jobs and remembers the sweep directory (see the module docstring)."""
+
+    def on_multirun_start(self, config: DictConfig, **kwargs: Any) -> None:
+        LAST_SWEEP.update({"dir": Path(config.hydra.sweep.dir), "start": time.time() - 1.0})
+
+    def on_job_end(self, config: DictConfig, job_return: JobReturn, **kwargs: Any) -> None:
+        out = Path(config.hydra.runtime.output_dir)
+        marker = out / MARKER
+        if job_return.status == JobStatus.FAILED:
+            error = job_return._return_value
+            marker.write_text(json.dumps({"error": f"{type(error).__name__}: {error}",
+                                          "overrides": list(job_return.overrides or [])}, indent=2))  # fmt: skip
+        else:
+            marker.unlink(missing_ok=True)
+
+    def on_multirun_end(self, config: DictConfig, **kwargs: Any) -> None:
+        report_failures(Path(config.hydra.sweep.dir), LAST_SWEEP.get("start", 0.0))

@@ -1,0 +1,112 @@
+"""Determinism and resume: identical runs give identical metrics; a run killed at random moments and resumed ends
+with the same metrics.csv as an uninterrupted one; run directories are never shared or overwritten."""
+
+from __future__ import annotations
+
+import csv
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from curiosity.errors import RunDirectoryError
+from curiosity.runtime.logger import is_wall_clock
+from curiosity.runtime.loop import run
+from tests.conftest import REPO, compose_cfg, run_cli
+
+ARGS = ["budget=smoke", "budget.max_steps=120", "budget.warmup_steps=40", "env.renderer=fast", "deterministic=true",
+        "checkpoint_every=20", "log_every=10", "seed=3"]  # fmt: skip
+
+
+def metrics_without_wall_clock(run_dir: Path) -> list[list[str]]:
+    """metrics.csv rows as text, without the columns that measure the machine."""
+    with (run_dir / "metrics.csv").open(newline="") as f:
+        rows = list(csv.reader(f))
+    keep = [i for i, c in enumerate(rows[0]) if not is_wall_clock(c)]
+    return [[row[i] for i in keep] for row in rows]
+
+
+def _rows(path: Path) -> int:
+    try:
+        return sum(1 for _ in path.open()) - 1
+    except FileNotFoundError:
+        return -1
+
+
+def test_same_seed_same_metrics_and_killed_runs_resume_to_the_same_metrics(tmp_path: Path) -> None:
+    first, second, killed = tmp_path / "first", tmp_path / "second", tmp_path / "killed"
+    for out in (first, second):
+        res = run_cli([*ARGS, f"hydra.run.dir={out}"], cwd=tmp_path)
+        assert res.returncode == 0, res.stderr[-2000:]
+    reference = metrics_without_wall_clock(first)
+    assert len(reference) == 13  # header + steps 10..120
+    assert metrics_without_wall_clock(second) == reference  # determinism
+
+    # Kill -9 after the rows of env steps 30, 70 and 100 are written (wherever the run is then), resume each time.
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    cmd = [sys.executable, "-m", "runners.train", *ARGS, "progress=false", f"hydra.run.dir={killed}"]
+    kills = 0
+    for kill_after_rows in (3, 7, 10):
+        proc = subprocess.Popen(cmd, cwd=tmp_path, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        deadline = time.time() + 300
+        while proc.poll() is None and _rows(killed / "metrics.csv") < kill_after_rows and time.time() < deadline:
+            time.sleep(0.02)
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGKILL)
+            kills += 1
+        proc.wait()
+    res = run_cli([*ARGS, f"hydra.run.dir={killed}"], cwd=tmp_path)  # resume to the end
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert kills >= 2
+    assert metrics_without_wall_clock(killed) == reference
+    steps = [int(r[0]) for r in metrics_without_wall_clock(killed)[1:]]
+    assert steps == sorted(set(steps))  # no step twice, none missing
+
+
+def test_a_run_directory_of_another_config_is_refused(tmp_path: Path) -> None:
+    cfg = compose_cfg([*ARGS, "budget.max_steps=50", "deterministic=false"])
+    run(cfg, tmp_path)
+    with pytest.raises(RunDirectoryError, match="another configuration"):
+        run(compose_cfg([*ARGS, "budget.max_steps=50", "seed=4"]), tmp_path)
+    with pytest.raises(RunDirectoryError, match="resume=false"):
+        run(compose_cfg([*ARGS, "budget.max_steps=50", "deterministic=false", "resume=false"]), tmp_path)
+    again = run(compose_cfg([*ARGS, "budget.max_steps=50", "deterministic=false", "progress=true"]), tmp_path)
+    assert again.env_steps == 50  # the same run, complete: returned as it is
+
+
+def test_a_directory_with_a_run_but_no_checkpoint_is_not_overwritten(tmp_path: Path) -> None:
+    (tmp_path / "metrics.csv").write_text("step\n1\n")
+    with pytest.raises(RunDirectoryError, match="without a checkpoint"):
+        run(compose_cfg(ARGS), tmp_path)
+    assert (tmp_path / "metrics.csv").read_text() == "step\n1\n"
+
+
+def test_a_live_writer_locks_its_run_directory(tmp_path: Path) -> None:
+    sleeper = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        (tmp_path / "run.lock").write_text(str(sleeper.pid))
+        with pytest.raises(RunDirectoryError, match="being written by process"):
+            run(compose_cfg(ARGS), tmp_path)
+    finally:
+        sleeper.kill()
+        sleeper.wait()
+    assert run(compose_cfg([*ARGS, "budget.max_steps=50"]), tmp_path).env_steps == 50  # a dead owner's lock is stale
+
+
+def test_sigterm_checkpoints_and_the_same_command_resumes(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    cmd = [sys.executable, "-m", "runners.train", *ARGS, "progress=false", f"hydra.run.dir={out}"]
+    proc = subprocess.Popen(cmd, cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    while proc.poll() is None and _rows(out / "metrics.csv") < 5:
+        time.sleep(0.02)
+    proc.send_signal(signal.SIGTERM)
+    output, _ = proc.communicate(timeout=120)
+    assert proc.returncode != 0 and "run the same command again to resume" in output
+    res = run_cli([*ARGS, f"hydra.run.dir={out}"], cwd=tmp_path)
+    assert res.returncode == 0 and "resuming" in res.stdout + res.stderr
+    assert int(metrics_without_wall_clock(out)[-1][0]) == 120
