@@ -43,7 +43,17 @@ def main() -> None:
     parser.add_argument("--markdown", action="store_true", help="print a Markdown table")
     args = parser.parse_args()
     table = steps_table(load_summaries(args.root))
-    print(table.to_markdown(index=False, floatfmt=".1f") if args.markdown else table.to_string(index=False))
+    print(to_markdown(table) if args.markdown else table.to_string(index=False))
+
+
+def to_markdown(table: pd.DataFrame) -> str:
+    """A Markdown table (floats with one decimal)."""
+    def cell(v: object) -> str:
+        return f"{v:.1f}" if isinstance(v, float) else str(v)
+
+    lines = ["| " + " | ".join(table.columns) + " |", "|" + "---|" * len(table.columns)]
+    lines += ["| " + " | ".join(cell(v) for v in row) + " |" for row in table.itertuples(index=False)]
+    return "\n".join(lines)
 
 
 if __name__ == "__main__":

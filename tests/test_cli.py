@@ -10,6 +10,8 @@ import pytest
 import yaml
 from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
 
+from analysis.collect import load_summaries
+from analysis.steps_table import steps_table
 from tests.conftest import run_cli
 
 CHARTS = ["step", "charts/coverage", "charts/wall_time", "charts/sps", "charts/extrinsic_reward", "intrinsic/reward"]
@@ -59,6 +61,10 @@ def test_multirun_seed_range_gives_integer_seeds_and_one_dir_per_job(tmp_path: P
         assert d.name == f"seed={cfg['seed']}" and (d / "metrics.csv").is_file() and any((d / "tb").iterdir())
         seeds.append(cfg["seed"])
     assert sorted(seeds) == [0, 0, 1, 1]
+    # the analysis reads these run directories back
+    table = steps_table(load_summaries(tmp_path / "sweep"))
+    assert table[["method", "seeds", "reached"]].values.tolist() == [["random", 4, 0]]
+    assert table["mean_capped"].tolist() == [200.0] and "per_seed" in table
 
 
 @pytest.mark.parametrize(
