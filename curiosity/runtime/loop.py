@@ -31,8 +31,10 @@ CHART_KEYS = ("charts/coverage", "charts/wall_time", "charts/sps", "charts/extri
 VOLATILE_KEYS = ("progress", "threads", "resume", "checkpoint_every")
 
 
-class Interrupted(RuntimeError):
-    """The run was stopped by a signal after writing a checkpoint; re-run the same command to resume it."""
+class Interrupted(KeyboardInterrupt):
+    """The run was stopped by SIGTERM/SIGINT after writing a checkpoint; re-run the same command to resume it.
+
+    A ``KeyboardInterrupt``, so a local sweep stops too instead of going on with its next job."""
 
 
 def check_built(cfg: DictConfig) -> None:
