@@ -21,19 +21,11 @@ import numpy as np
 import torch
 
 from curiosity.config import build, setup
+from curiosity.config.compose import compose_config
 from curiosity.envs import make_env
 from curiosity.runtime.seeding import seed_everything
 
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
-
-
-def compose(overrides: Sequence[str]):
-    """The run config for ``overrides`` (as ``python -m runners.train`` would compose it)."""
-    from hydra import compose as hydra_compose
-    from hydra import initialize_config_module
-
-    with initialize_config_module(config_module="conf", version_base="1.3"):
-        return hydra_compose(config_name="config", overrides=list(overrides))
 
 
 def machine() -> dict[str, str | int]:
@@ -61,7 +53,7 @@ def timed(fn: Callable[[], object], repeats: int, warmup: int = 2) -> float:
 
 def bench_env(env_name: str, obs: str, renderer: str, steps: int = 400) -> float:
     """Env steps per second with random actions."""
-    cfg = compose([f"env={env_name}", f"env.obs={obs}", f"env.renderer={renderer}"])
+    cfg = compose_config([f"env={env_name}", f"env.obs={obs}", f"env.renderer={renderer}"])
     env = make_env(cfg.env, 10_000)
     env.reset(seed=0)
     rng = np.random.default_rng(0)
@@ -74,7 +66,7 @@ def bench_env(env_name: str, obs: str, renderer: str, steps: int = 400) -> float
 
 def filled_agent(overrides: Sequence[str], memory: int):
     """The paper's agent after ``memory`` random env steps (fast renderer), its memory refreshed."""
-    cfg = compose(["env.renderer=fast", f"budget.warmup_steps={min(64, memory)}", *overrides])
+    cfg = compose_config(["env.renderer=fast", f"budget.warmup_steps={min(64, memory)}", *overrides])
     seed_everything(0, threads=torch.get_num_threads())
     env = make_env(cfg.env, memory + 10)
     agent = build(cfg.baseline, cfg=cfg)

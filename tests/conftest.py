@@ -9,10 +9,10 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import pytest
-from hydra import compose, initialize_config_dir
 from omegaconf import DictConfig
 
 from curiosity.config import setup
+from curiosity.config.compose import compose_config
 
 REPO = Path(__file__).resolve().parents[1]
 CONF = REPO / "conf"
@@ -23,8 +23,7 @@ setup()
 
 def compose_cfg(overrides: Sequence[str] = ()) -> DictConfig:
     """The composed run config for ``overrides`` (no Hydra runtime node)."""
-    with initialize_config_dir(config_dir=str(CONF), version_base="1.3"):
-        return compose(config_name="config", overrides=list(overrides))
+    return compose_config(overrides)
 
 
 @pytest.fixture
