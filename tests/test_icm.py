@@ -53,7 +53,7 @@ def same(a: list[torch.Tensor], b: list[torch.Tensor]) -> bool:
 
 def test_feature_net_shapes() -> None:
     conv = make_feature_net(PIXELS, 5)
-    assert conv[-1].in_features == 128  # the NSRS conv stack flattens 4×32×32 to 128
+    assert conv.head.in_features == 128  # the NSRS conv stack flattens 4×32×32 to 128
     assert conv(torch.zeros(2, *PIXELS)).shape == (2, 5)
     assert make_feature_net(VECTOR, 5)(torch.zeros(2, 6)).shape == (2, 5)
     with pytest.raises(ValueError):

@@ -96,3 +96,9 @@ def test_gradients_reach_every_parameter(module):
     x = torch.randn(4, next(module.parameters()).shape[1])
     module(x).sum().backward()
     assert all(p.grad is not None and torch.isfinite(p.grad).all() for p in module.parameters())
+
+
+def test_conv_encoder_flattens_any_frame_size() -> None:
+    enc = ConvEncoder(in_channels=2, latent_dim=3, frame_size=48)
+    assert enc(torch.zeros(5, 2, 48, 48)).shape == (5, 3)
+    assert ConvEncoder().head.in_features == 128

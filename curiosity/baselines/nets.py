@@ -12,27 +12,14 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-import torch
 from torch import nn
 
+from curiosity.nets.encoders import ConvEncoder
 
-def conv_feature_net(obs_shape: Sequence[int], out_dim: int) -> nn.Sequential:
-    """NSRS-style conv encoder (C, H, W) → (out_dim,); the flatten size is inferred (128 for 4×32×32)."""
-    channels = int(obs_shape[0])
-    trunk = nn.Sequential(
-        nn.Conv2d(channels, 8, 3, padding=1),
-        nn.Tanh(),
-        nn.Conv2d(8, 16, 3, padding=1),
-        nn.Tanh(),
-        nn.MaxPool2d(4, padding=1),
-        nn.Conv2d(16, 32, 3),
-        nn.Tanh(),
-        nn.MaxPool2d(3),
-        nn.Flatten(),
-    )
-    with torch.no_grad():
-        flat = trunk(torch.zeros(1, *obs_shape)).shape[1]
-    return nn.Sequential(*trunk, nn.Linear(flat, out_dim))
+
+def conv_feature_net(obs_shape: Sequence[int], out_dim: int) -> nn.Module:
+    """NSRS-style conv encoder (C, H, W) → (out_dim,): the paper agent's :class:`~curiosity.nets.encoders.ConvEncoder`."""
+    return ConvEncoder(in_channels=int(obs_shape[0]), latent_dim=out_dim, frame_size=int(obs_shape[-1]))
 
 
 def mlp(in_dim: int, out_dim: int, hidden: Sequence[int] = (64, 64)) -> nn.Sequential:
@@ -46,7 +33,7 @@ def mlp(in_dim: int, out_dim: int, hidden: Sequence[int] = (64, 64)) -> nn.Seque
     return nn.Sequential(*layers)
 
 
-def make_feature_net(obs_shape: Sequence[int], out_dim: int, mlp_hidden: Sequence[int] = (64, 64)) -> nn.Sequential:
+def make_feature_net(obs_shape: Sequence[int], out_dim: int, mlp_hidden: Sequence[int] = (64, 64)) -> nn.Module:
     """Encoder for one observation: (B, *obs_shape) → (B, out_dim).
 
     Args:
@@ -74,4 +61,4 @@ def make_predictor_net(
     can fit the target's function on visited states.
     """
     trunk = make_feature_net(obs_shape, hidden, mlp_hidden)
-    return nn.Sequential(*trunk, nn.ReLU(), nn.Linear(hidden, hidden), nn.ReLU(), nn.Linear(hidden, out_dim))
+    return nn.Sequential(trunk, nn.ReLU(), nn.Linear(hidden, hidden), nn.ReLU(), nn.Linear(hidden, out_dim))

@@ -76,6 +76,7 @@ class ConvEncoderConfig:
     _target_: str = "curiosity.nets.encoders.ConvEncoder"
     in_channels: int = "${env.frame_stack}"  # type: ignore[assignment]
     latent_dim: int = "${internal_dim}"  # type: ignore[assignment]
+    frame_size: int = "${env.frame_size}"  # type: ignore[assignment]
 
 
 @dataclass

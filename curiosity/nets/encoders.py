@@ -47,9 +47,10 @@ class ConvEncoder(nn.Module):
         in_channels: number of stacked frames C.
         latent_dim: d, the latent size.
         channels_last: store weights and run convolutions in channels-last layout.
+        frame_size: side of the square frames (32: the flattened features are 128).
     """
 
-    def __init__(self, in_channels: int = 4, latent_dim: int = 4, channels_last: bool = True) -> None:
+    def __init__(self, in_channels: int = 4, latent_dim: int = 4, channels_last: bool = True, frame_size: int = 32) -> None:
         super().__init__()
         self.channels_last = channels_last
         self.features = nn.Sequential(
@@ -63,7 +64,9 @@ class ConvEncoder(nn.Module):
             nn.MaxPool2d(3),
             nn.Flatten(),
         )
-        self.head = nn.Linear(128, latent_dim)
+        with torch.no_grad():
+            flat = self.features(torch.zeros(1, in_channels, frame_size, frame_size)).shape[1]
+        self.head = nn.Linear(flat, latent_dim)
         if channels_last:
             self.features.to(memory_format=torch.channels_last)
 
