@@ -15,7 +15,8 @@ def run_dirs(root: str | Path) -> list[Path]:
 
 
 def load_summaries(root: str | Path) -> pd.DataFrame:
-    """One row per run: the summary's fields, the run's group choices (``env``, ``entropy``, …) and its path."""
+    """One row per run: the summary's fields, the run's group choices (``env``, ``entropy``, …), its overrides
+    (``variant``: the run directory's parent, e.g. ``+experiment=paper_text`` or ``default``) and its path."""
     rows = []
     for d in run_dirs(root):
         row = json.loads((d / "summary.json").read_text())
@@ -24,6 +25,7 @@ def load_summaries(root: str | Path) -> pd.DataFrame:
             node = cfg.get(group)
             if isinstance(node, dict) and "name" in node:
                 row[group] = str(node["name"])
+        row["variant"] = d.parent.name  # the run's command-line overrides (``default`` when none)
         row["run_dir"] = str(d)
         rows.append(row)
     return pd.DataFrame(rows)

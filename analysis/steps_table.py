@@ -15,7 +15,7 @@ import pandas as pd
 from analysis.collect import load_summaries
 
 
-def steps_table(summaries: pd.DataFrame, by: tuple[str, ...] = ("env", "method")) -> pd.DataFrame:
+def steps_table(summaries: pd.DataFrame, by: tuple[str, ...] = ("env", "method", "variant")) -> pd.DataFrame:
     """One row per group of ``by``: seeds, reached, per-seed steps, mean ± SE, mean with censored runs at cap."""
     rows = []
     for key, g in summaries.groupby(list(by), sort=True):

@@ -63,8 +63,10 @@ def test_multirun_seed_range_gives_integer_seeds_and_one_dir_per_job(tmp_path: P
     assert sorted(seeds) == [0, 0, 1, 1]
     # the analysis reads these run directories back
     table = steps_table(load_summaries(tmp_path / "sweep"))
-    assert table[["method", "seeds", "reached"]].values.tolist() == [["random", 4, 0]]
-    assert table["mean_capped"].tolist() == [200.0] and "per_seed" in table
+    assert table[["method", "seeds", "reached"]].values.tolist() == [["random", 2, 0], ["random", 2, 0]]
+    assert sorted(table["variant"]) == ["baseline=random,budget=smoke,env.renderer=fast,estimator=kde",
+                                        "baseline=random,budget=smoke,env.renderer=fast,estimator=knn"]  # fmt: skip
+    assert table["mean_capped"].tolist() == [200.0, 200.0] and "per_seed" in table
 
 
 @pytest.mark.parametrize(
