@@ -9,10 +9,12 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import pytest
+import torch
 from omegaconf import DictConfig
 
 from curiosity.config import setup
 from curiosity.config.compose import compose_config
+from curiosity.types import TransitionBatch
 
 REPO = Path(__file__).resolve().parents[1]
 CONF = REPO / "conf"
@@ -38,6 +40,27 @@ def run_cli(args: Sequence[str], cwd: Path, timeout: float = 600) -> subprocess.
         [sys.executable, "-m", "runners.train", *args, "progress=false"],
         cwd=cwd, env=env, capture_output=True, text=True, timeout=timeout,
     )  # fmt: skip
+
+
+@pytest.fixture
+def one_thread():
+    """One torch intra-op thread for the test (tiny nets run faster so, and far faster on a shared machine)."""
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(threads)
+
+
+def random_batch(batch_size: int, obs_shape: tuple[int, ...], seed: int, n_actions: int = 3) -> TransitionBatch:
+    """A seeded batch of random transitions: observations in [0, 1), zero rewards, no terminals."""
+    g = torch.Generator().manual_seed(seed)
+    return TransitionBatch(
+        obs=torch.rand(batch_size, *obs_shape, generator=g),
+        act=torch.randint(0, n_actions, (batch_size,), generator=g),
+        next_obs=torch.rand(batch_size, *obs_shape, generator=g),
+        rewards=torch.zeros(batch_size),
+        terminateds=torch.zeros(batch_size),
+    )
 
 
 def group_options() -> list[tuple[str, str]]:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from typing import Any
 
 import pytest
@@ -11,28 +10,16 @@ import torch
 from curiosity.baselines import RND
 from curiosity.intrinsic.base import IntrinsicReward
 from curiosity.types import TransitionBatch
+from tests.conftest import random_batch
 
 PIXELS, VECTOR = (4, 32, 32), (6,)
 
 
-@pytest.fixture(autouse=True, scope="module")
-def _one_thread() -> Iterator[None]:
-    """These nets are tiny: one intra-op thread is faster, and far faster when other jobs share the 2 cores."""
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(threads)
+pytestmark = pytest.mark.usefixtures("one_thread")
 
 
 def make_batch(batch_size: int, obs_shape: tuple[int, ...], seed: int) -> TransitionBatch:
-    g = torch.Generator().manual_seed(seed)
-    return TransitionBatch(
-        obs=torch.rand(batch_size, *obs_shape, generator=g),
-        act=torch.randint(0, 3, (batch_size,), generator=g),
-        next_obs=torch.rand(batch_size, *obs_shape, generator=g),
-        rewards=torch.zeros(batch_size),
-        terminateds=torch.zeros(batch_size),
-    )
+    return random_batch(batch_size, obs_shape, seed)
 
 
 def make_rnd(obs_shape: tuple[int, ...], seed: int = 0, **kwargs: Any) -> RND:
