@@ -12,7 +12,7 @@ import torch
 from curiosity.agents.curiosity import LatentCuriosity
 from curiosity.agents.paper import PaperAgent, build_world_model
 from curiosity.config import build
-from curiosity.novelty.estimators import KNNNovelty
+from curiosity.novelty.estimators import KDENovelty, KNNNovelty
 from curiosity.novelty.memory import EmbeddingMemory
 from curiosity.replay import ReplayBuffer
 from curiosity.runtime.loop import run
@@ -133,3 +133,23 @@ def test_agent_state_dict_round_trip_gives_the_same_actions(tmp_path: Path) -> N
     torch.manual_seed(5)
     a2 = [twin.act(obs, 30 + i) for i in range(5)]
     assert a1 == a2
+
+
+def test_refresh_takes_the_random_phase_reference_from_the_memory() -> None:
+    cfg = compose_cfg(["env.obs=state", "encoder=mlp"])
+    model = build_world_model(cfg)
+    replay = ReplayBuffer(100, (6,))
+    cur = LatentCuriosity(model, KDENovelty(bandwidth=1.0, bandwidth_rule="fixed"), replay, EmbeddingMemory(),
+                          n_actions=3, novelty_input="state_action", warmup_steps=4)  # fmt: skip
+    rng = np.random.default_rng(1)
+    obs = rng.normal(size=6).astype(np.float32)
+    for t in range(10):
+        nxt = rng.normal(size=6).astype(np.float32)
+        replay.add(obs, t % 3, -1.0, nxt, False)
+        cur.add(torch.zeros(cfg.internal_dim), t % 3, t)
+        obs = nxt
+    cur.refresh()
+    with torch.no_grad():
+        expected = cur.embed(model.encode(replay.obs_at(np.arange(4))), replay.actions_at(np.arange(4)))
+    torch.testing.assert_close(cur.estimator.reward.reference, expected)  # the first 4 transitions, re-encoded
+    torch.testing.assert_close(cur.memory.tensor()[:4], expected)

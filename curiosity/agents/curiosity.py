@@ -109,7 +109,12 @@ class LatentCuriosity(IntrinsicReward):
         ref_keys = np.arange(min(self.warmup_steps, self.replay.total_added))
         reference = None
         if len(ref_keys) > 1:
-            reference = self.embed(self._encode_stored(ref_keys), self.replay.actions_at(ref_keys))
+            row = {int(k): i for i, k in enumerate(keys)}
+            if all(int(k) in row for k in ref_keys):  # the random phase is in the memory: no second encoding
+                z_ref = z[[row[int(k)] for k in ref_keys]]
+            else:  # a reservoir may have dropped some of it
+                z_ref = self._encode_stored(ref_keys)
+            reference = self.embed(z_ref, self.replay.actions_at(ref_keys))
         self.estimator.fit(self.memory.tensor(), reference)
         self.ready = True
 
