@@ -8,15 +8,13 @@ from pathlib import Path
 from hydra import compose, initialize_config_dir
 from omegaconf import DictConfig
 
-from curiosity.config.resolvers import register_resolvers
-from curiosity.config.schema import register_schemas
+from curiosity.config import setup
 
 CONF_DIR = Path(__file__).resolve().parents[2] / "conf"
 
 
 def compose_config(overrides: Sequence[str] = ()) -> DictConfig:
     """The run config for command-line style ``overrides`` (``["estimator=knn", "seed=3"]``), without Hydra's node."""
-    register_schemas()
-    register_resolvers()
+    setup()
     with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
         return compose(config_name="config", overrides=list(overrides))

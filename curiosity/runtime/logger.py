@@ -52,6 +52,7 @@ class RunLogger:
         self.csv_path = self.run_dir / "metrics.csv"
         self._sums: dict[str, float] = {}
         self._counts: dict[str, int] = {}
+        self.last_step = 0  # the step of the last dump
         purge = None
         if resume is None:
             self._file = self.csv_path.open("w", newline="")
@@ -74,8 +75,6 @@ class RunLogger:
         self._writer = csv.DictWriter(self._file, fieldnames=self.columns)
         self._sums, self._counts = dict(state["sums"]), dict(state["counts"])
         self.last_step = int(state["last_step"])
-
-    last_step = 0
 
     def state_dict(self) -> dict[str, Any]:
         """Where the logger is: bytes of ``metrics.csv`` written, the last dumped step, the open window."""

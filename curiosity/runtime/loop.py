@@ -119,6 +119,7 @@ class _Run:
         self.rng = np.random.default_rng(cfg.seed)
         self.step, self.steps_to_goal, self.wall_before = 0, None, 0.0
         self.stop_signal: int | None = None
+        self._start: float | None = None  # perf_counter at the start of execute()
         columns = [*CHART_KEYS, *self.agent.metric_keys]
         if ckpt is None:
             self.obs, _ = self.env.reset(seed=cfg.seed)
@@ -151,7 +152,7 @@ class _Run:
         })  # fmt: skip
 
     def _wall(self) -> float:
-        return self.wall_before + (time.perf_counter() - self._start if hasattr(self, "_start") else 0.0)
+        return self.wall_before + (0.0 if self._start is None else time.perf_counter() - self._start)
 
     def _on_signal(self, signum: int, frame: object) -> None:
         self.stop_signal = signum
@@ -185,7 +186,7 @@ class _Run:
                 try:
                     terminated = self._step()
                 except NumericalFault as fault:  # stop; keep the last good checkpoint; no NaN row was written
-                    raise NumericalFault(f"{fault.term}", fault.value, self.step + 1) from None
+                    raise NumericalFault(fault.term, fault.value, self.step + 1) from None
                 self.step += 1
                 if terminated:
                     self.steps_to_goal = self.step
