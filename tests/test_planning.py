@@ -24,7 +24,7 @@ def toy_reward(z, a):
     return z[:, 0] + BONUS[a]
 
 
-def zero_intrinsic(z, a):
+def zero_intrinsic(z, a, z_next=None):
     return torch.zeros(z.shape[0], dtype=z.dtype)
 
 
@@ -34,8 +34,9 @@ def brute_force_returns(z0, seqs, step, reward, intrinsic, gamma, eta):
         z, total = z0.unsqueeze(0), 0.0
         for i, a in enumerate(seq):
             act = torch.tensor([a])
-            total += gamma**i * float(reward(z, act) + eta * intrinsic(z, act))
-            z = step(z, act)
+            z_next = step(z, act)
+            total += gamma**i * float(reward(z, act) + eta * intrinsic(z, act, z_next))
+            z = z_next
         out.append(total)
     return torch.tensor(out, dtype=torch.float64)
 
@@ -77,9 +78,9 @@ def test_mpc_scores_match_brute_force_on_random_nets(horizon, max_candidates):
     def reward(z, a):
         return torch.sin(z).sum(1) * (a.double() - 1)
 
-    def intrinsic(z, a):
+    def intrinsic(z, a, z_next):
         y = torch.cat([z, one_hot(a, 3).double()], 1)
-        return torch.cdist(y, memory).min(1).values
+        return torch.cdist(y, memory).min(1).values + torch.cos(z_next).sum(1)
 
     planner = MPCPlanner(horizon=horizon, gamma=0.8, eta=0.7, max_candidates=max_candidates)
     z0 = torch.randn(2, dtype=torch.float64)
@@ -89,7 +90,7 @@ def test_mpc_scores_match_brute_force_on_random_nets(horizon, max_candidates):
         torch.testing.assert_close(planner.scores(z0, seqs, step, reward, intrinsic), expected)
 
 
-def test_mpc_scores_pairs_before_stepping():
+def test_mpc_scores_rewards_before_stepping():
     def poisoned_step(z, a):
         return torch.full_like(z, float("nan"))
 

@@ -29,6 +29,14 @@ class Agent(abc.ABC):
     ) -> dict[str, float]:
         """Store the transition taken at env step ``step`` (0-based), train if scheduled, return logged scalars."""
 
+    def attach_env(self, env: Any) -> None:  # noqa: B027  (optional hook)
+        """Called once by the loop with the run's env, before the first step; agents that branch the real simulator
+        (the oracle planner, the model probe) keep it. Default: nothing."""
+
+    def summary(self) -> dict[str, Any]:
+        """Run totals for ``summary.json`` (``agent``); default none."""
+        return {}
+
     @abc.abstractmethod
     def state_dict(self) -> dict[str, Any]:
         """Everything needed to resume the agent exactly (networks, optimisers, replay, RNGs)."""

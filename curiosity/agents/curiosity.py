@@ -10,10 +10,13 @@ at the last refresh, so the bandwidth and ``action_scale`` are in units of the l
 encoder trains.
 
 Prediction-error bonus (weight α = ``alpha``): on a real transition, r_pe = log1p(e / (ē + ε)) with the true error
-e = ‖T(s, a) − s'‖² (paper Eq. 10). An imagined edge has no true successor, so the planners score it with the model's
-MC-dropout disagreement ê(s, a) = mean_m ‖T_m(s, a) − T(s, a)‖² (its own estimate of that error), normalised by the
-running mean of ê at the real pairs visited: the paper is silent here and this is our choice. Both running means are
-updated after use, once per env step.
+e = ‖T(s, a) − s'‖² (paper Eq. 10). An imagined edge has no true successor; the paper is silent on how the planner
+scores it, and ``pe_imagined`` chooses the model's own estimate ê(s, a) of that error, normalised by the running
+mean of ê at the real pairs visited:
+    ``dropout``: MC-dropout disagreement mean_m ‖T_m(s, a) − T(s, a)‖² (random: a fresh draw at every evaluation);
+    ``ensemble``: disagreement of a deep ensemble of transitions (``transition_ensemble`` ≥ 2; deterministic);
+    ``off``: imagined edges are scored by novelty alone (weight 1), real transitions keep the hybrid.
+Both running means are updated after use, once per env step.
 """
 
 from __future__ import annotations
@@ -33,6 +36,7 @@ from curiosity.replay import ReplayBuffer
 from curiosity.types import TransitionBatch
 
 NOVELTY_INPUTS = ("state_action", "state")
+PE_IMAGINED = ("dropout", "ensemble", "off")
 CURIOSITY_KEYS = ("intrinsic/novelty", "intrinsic/pe", "intrinsic/pe_error", "intrinsic/memory_size")
 
 
@@ -50,7 +54,8 @@ class LatentCuriosity(IntrinsicReward):
         alpha: α ∈ [0, 1].
         pe_average: running mean of the bonus, ``cumulative`` or ``ema``.
         pe_eps: ε.
-        dropout_samples: MC-dropout samples for imagined edges.
+        dropout_samples: MC-dropout samples for imagined edges (``pe_imagined=dropout``).
+        pe_imagined: how imagined edges get their prediction-error term: ``dropout``, ``ensemble`` or ``off``.
         warmup_steps: the random phase: transitions with global index below it form the reference set.
         scale: multiplies ``__call__``.
     """
@@ -58,8 +63,11 @@ class LatentCuriosity(IntrinsicReward):
     def __init__(self, model: WorldModel, estimator: Any, replay: ReplayBuffer, memory: EmbeddingMemory, *,
                  n_actions: int, novelty_input: str = "state_action", action_scale: float = 1.0, alpha: float = 0.5,
                  pe_average: str = "cumulative", pe_eps: float = 1e-8, dropout_samples: int = 8, warmup_steps: int = 64,
-                 standardise: bool = True, scale: float = 1.0) -> None:  # fmt: skip
+                 standardise: bool = True, pe_imagined: str = "dropout", scale: float = 1.0) -> None:  # fmt: skip
         super().__init__(scale)
+        if pe_imagined not in PE_IMAGINED:
+            raise ValueError(f"pe_imagined must be one of {PE_IMAGINED}, got {pe_imagined!r}")
+        self.pe_imagined_kind = pe_imagined
         if novelty_input not in NOVELTY_INPUTS:
             raise ValueError(f"novelty_input must be one of {NOVELTY_INPUTS}, got {novelty_input!r}")
         self.model, self.estimator, self.replay, self.memory = model, estimator, replay, memory
@@ -118,6 +126,16 @@ class LatentCuriosity(IntrinsicReward):
         self.estimator.fit(self.memory.tensor(), reference)
         self.ready = True
 
+    @torch.no_grad()
+    def drift(self, rows: int = 64) -> float:
+        """How far the memory has gone stale: the median distance, in standardised latent units, between up to ``rows``
+        memory rows (evenly spaced) and the embedding the current encoder gives their observations."""
+        keys = self.memory.keys()
+        index = torch.linspace(0, len(keys) - 1, min(rows, len(keys))).round().long()
+        now = self._std(self._encode_stored(keys[index].numpy()))
+        stored = self.memory.tensor()[index, : now.shape[1]]
+        return float((now - stored).norm(dim=1).median())
+
     # ------------------------------------------------------------------ rewards
     def novelty(self, z: Tensor, a: Tensor, z_next: Tensor | None) -> Tensor:
         """Novelty of edges (z, a, z_next): (N, d), (N,), (N, d) -> (N,)."""
@@ -126,14 +144,38 @@ class LatentCuriosity(IntrinsicReward):
             return self.estimator(self._std(z_next))
         return self.estimator(self.embed(z, a))
 
-    def imagined(self, z: Tensor, a: Tensor, z_next: Tensor | None = None) -> Tensor:
-        """r_int of imagined edges for planners: (N, d), (N,) [, (N, d)] -> (N,). Computes z_next if needed."""
+    @property
+    def imagined_alpha(self) -> float:
+        """The weight of the prediction-error term on imagined edges (0 when ``pe_imagined=off``)."""
+        return 0.0 if self.pe_imagined_kind == "off" else self.alpha
+
+    @property
+    def stochastic(self) -> bool:
+        """Whether :meth:`imagined_terms` draws random numbers (MC dropout), so two evaluations differ."""
+        return self.pe_imagined_kind == "dropout" and self.alpha > 0
+
+    def _imagined_error(self, z: Tensor, a: Tensor) -> Tensor:
+        if self.pe_imagined_kind == "ensemble":
+            return self.model.ensemble_disagreement(z, a)
+        return self.model.dropout_disagreement(z, a, self.dropout_samples)
+
+    def imagined_terms(self, z: Tensor, a: Tensor, z_next: Tensor | None = None) -> dict[str, Tensor]:
+        """The weighted terms of r_int of imagined edges: ``novelty`` (1 − α) r_nov and, with α > 0, ``pe`` α r̂_pe.
+
+        (N, d), (N,) [, (N, d)] -> name -> (N,); z_next is computed with the model if needed and not given.
+        """
         if z_next is None and self.novelty_input == "state":
             z_next = self.model.next(z, a)
-        r = (1 - self.alpha) * self.novelty(z, a, z_next)
-        if self.alpha > 0:
-            r = r + self.alpha * self.pe_imagined.compute(self.model.dropout_disagreement(z, a, self.dropout_samples))
-        return r
+        alpha = self.imagined_alpha
+        terms = {"novelty": (1 - alpha) * self.novelty(z, a, z_next)}
+        if alpha > 0:
+            terms["pe"] = alpha * self.pe_imagined.compute(self._imagined_error(z, a))
+        return terms
+
+    def imagined(self, z: Tensor, a: Tensor, z_next: Tensor | None = None) -> Tensor:
+        """r_int of imagined edges for planners: (N, d), (N,) [, (N, d)] -> (N,), the sum of :meth:`imagined_terms`."""
+        terms = self.imagined_terms(z, a, z_next)
+        return torch.stack(list(terms.values())).sum(0)
 
     def _true_error(self, z: Tensor, a: Tensor, z_next: Tensor) -> Tensor:
         with self.model.evaluating():
@@ -153,8 +195,8 @@ class LatentCuriosity(IntrinsicReward):
     def observe_latents(self, z: Tensor, a: Tensor, z_next: Tensor) -> None:
         """Fold real transitions into both prediction-error running means (after their rewards were used)."""
         self.pe_real.update(self._true_error(z, a, z_next))
-        if self.alpha > 0:
-            self.pe_imagined.update(self.model.dropout_disagreement(z, a, self.dropout_samples))
+        if self.imagined_alpha > 0:
+            self.pe_imagined.update(self._imagined_error(z, a))
 
     # ------------------------------------------------------------------ IntrinsicReward interface
     @torch.no_grad()

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 import torch
-from omegaconf import DictConfig
+from omegaconf import DictConfig, OmegaConf
 
 from curiosity.agents.base import Agent
 from curiosity.agents.curiosity import CURIOSITY_KEYS, LatentCuriosity
@@ -21,14 +21,22 @@ from curiosity.agents.representation import LOSS_KEYS, LossWeights, check_finite
 from curiosity.agents.schedule import TrainSchedule
 from curiosity.agents.world_model import WorldModel
 from curiosity.config.build import build, choice
+from curiosity.envs.simulator import Simulator, SimStates
 from curiosity.nets.backward import BackwardPredictor
 from curiosity.nets.reward import RewardModel
-from curiosity.nets.transition import ResidualTransition
+from curiosity.nets.transition import ResidualTransition, TransitionEnsemble
 from curiosity.novelty.memory import EmbeddingMemory
+from curiosity.planning.probe import probe_keys, probe_model
+from curiosity.planning.rollout import SimulatorRollout
 from curiosity.replay import ReplayBuffer
 
 AGENT_KEYS = ("intrinsic/reward", "losses/q", "train/iterations", "planner/score", "planner/entropy",
-              "timing/train_ms", "timing/refresh_ms", "timing/plan_ms")  # fmt: skip
+              "planner/first_action_entropy", "planner/spread/score", "planner/spread/novelty", "planner/spread/pe",
+              "planner/spread/reward", "planner/noise", "planner/noise_flip", "memory/drift", "memory/refreshed",
+              "timing/train_ms", "timing/refresh_ms", "timing/plan_ms", "timing/probe_ms")  # fmt: skip
+# run means of these planner/probe columns go to summary.json ("agent")
+SUMMARY_KEYS = ("planner/first_action_entropy", "planner/noise", "planner/noise_flip", "probe/effect_ratio/1",
+                "probe/effect_ratio/3", "probe/spearman", "probe/agree", "memory/drift", "memory/refreshed")  # fmt: skip
 
 
 def obs_shape_of(env_cfg: DictConfig) -> tuple[int, ...]:
@@ -45,7 +53,11 @@ def build_world_model(cfg: DictConfig) -> WorldModel:
     b = cfg.backward
     backward = BackwardPredictor(d, n_actions, n_candidates=b.n_candidates, noise_dim=b.noise_dim,
                                  hidden=b.hidden) if b.coef > 0 else None  # fmt: skip
-    transition = ResidualTransition(d, n_actions, hidden=cfg.transition_hidden, dropout=cfg.transition_dropout)
+    if cfg.transition_ensemble > 1:
+        transition: torch.nn.Module = TransitionEnsemble(
+            d, n_actions, size=cfg.transition_ensemble, hidden=cfg.transition_hidden, dropout=cfg.transition_dropout)
+    else:
+        transition = ResidualTransition(d, n_actions, hidden=cfg.transition_hidden, dropout=cfg.transition_dropout)
     return WorldModel(build(cfg.encoder), transition, n_actions, reward, backward)
 
 
@@ -74,32 +86,99 @@ class PaperAgent(Agent):
             novelty_input=choice(cfg.novelty_input), action_scale=cfg.action_scale, alpha=cfg.hybrid_alpha,
             pe_average=choice(cfg.pe_average), pe_eps=cfg.pe_eps, dropout_samples=cfg.pe_dropout_samples,
             warmup_steps=cfg.budget.warmup_steps, standardise=cfg.standardise_latents,
+            pe_imagined=choice(cfg.pe_imagined),
         )  # fmt: skip
         b = cfg.budget
         self.schedule = TrainSchedule(b.warmup_steps, b.train_every, b.iters_per_train, b.ramp, b.early_stop_every,
                                       b.early_stop_threshold)  # fmt: skip
         self.rng = np.random.default_rng([int(cfg.seed), 2])
         self.generator = torch.Generator().manual_seed(int(cfg.seed))
-        self.metric_keys = (*LOSS_KEYS, *CURIOSITY_KEYS, *AGENT_KEYS, *getattr(self.curiosity.estimator, "log_keys", ()))
+        self.oracle = choice(OmegaConf.select(cfg, "planner.model", default="learned")) == "oracle"
+        self.probe_every = int(cfg.probe_every) if self.q is None else 0  # the probe scores with the MPC planner
+        first = tuple(f"planner/p_first/{a}" for a in range(self.n_actions))
+        probe = probe_keys(cfg.planner.horizon) if self.probe_every else ()
+        self.metric_keys = (*LOSS_KEYS, *CURIOSITY_KEYS, *AGENT_KEYS, *first, *probe,
+                            *getattr(self.curiosity.estimator, "log_keys", ()))  # fmt: skip
         self._plan_logs: dict[str, float] = {}
+        self.env: Any = None
+        self.simulator: Simulator | None = None
+        self.totals: dict[str, list[float]] = {}  # key -> [sum, count] of SUMMARY_KEYS
+
+    def attach_env(self, env: Any) -> None:
+        """Keep the run's env when the oracle planner or the probe branch its simulator."""
+        if self.oracle or self.probe_every:
+            self.env, self.simulator = env, Simulator(self.cfg.env)
+
+    def summary(self) -> dict[str, Any]:
+        """Run means of the planner, probe and memory columns (``SUMMARY_KEYS``) and how imagined steps were made."""
+        means = {k: total / n for k, (total, n) in self.totals.items() if n}
+        return {"planner_model": "oracle" if self.oracle else "learned", "pe_imagined": self.curiosity.pe_imagined_kind,
+                "means": means}  # fmt: skip
+
+    def _tally(self, logs: dict[str, float]) -> None:
+        for key in SUMMARY_KEYS:
+            if key in logs:
+                total = self.totals.setdefault(key, [0.0, 0])
+                total[0] += logs[key]
+                total[1] += 1
 
     # ------------------------------------------------------------------ acting
-    def _plan(self, z0: torch.Tensor) -> tuple[int, dict[str, float]]:
+    def _reward_fn(self) -> Any:
+        return self.model.reward if self.model.reward_model is not None else None
+
+    def _root(self, obs: np.ndarray) -> SimStates:
+        assert self.simulator is not None, "attach_env() was not called"
+        return self.simulator.root(self.env, obs)
+
+    def _plan(self, z0: torch.Tensor, obs: np.ndarray) -> tuple[int, dict[str, float]]:
         cur, model = self.curiosity, self.model
         if self.q is not None:
             return self.planner.plan(z0, model.next, cur.imagined, self.q.values)
-        reward_fn = model.reward if model.reward_model is not None else None
-        return self.planner.plan(z0, model.next, reward_fn, cur.imagined, self.generator)
+        rollout = None
+        if self.oracle:
+            assert self.simulator is not None, "attach_env() was not called"
+            rollout = SimulatorRollout(self.simulator, self._root(obs), z0, model.encode)
+        return self.planner.plan(z0, model.next, self._reward_fn(), cur.imagined_terms, self.generator, rollout=rollout)
+
+    def _score_noise(self, z0: torch.Tensor, obs: np.ndarray) -> dict[str, float]:
+        """Two fresh evaluations of the (stochastic) scores of every candidate: their noise and whether the best first
+        action flips between them. Only for learned-model MPC with full enumeration and a stochastic term."""
+        planner = self.planner
+        if self.q is not None or self.oracle or not self.curiosity.stochastic:
+            return {}
+        if planner.n_actions**planner.horizon > planner.max_candidates:
+            return {}
+        seqs = planner.candidates()
+        g1, g2 = (planner.scores(z0, seqs, self.model.next, self._reward_fn(), self.curiosity.imagined_terms)
+                  for _ in range(2))  # fmt: skip
+        flip = int(seqs[int(g1.argmax()), 0]) != int(seqs[int(g2.argmax()), 0])
+        return {"planner/noise": float((g1 - g2).std(correction=0)) / 2**0.5, "planner/noise_flip": float(flip)}
+
+    def _probe(self, z0: torch.Tensor, obs: np.ndarray, step: int) -> dict[str, float]:
+        if not self.probe_every or (step - self.cfg.budget.warmup_steps) % self.probe_every:
+            return {}
+        start = time.perf_counter()
+        assert self.simulator is not None, "attach_env() was not called"
+        out = probe_model(self.planner, z0, self.model.next, self._reward_fn(), self.curiosity.imagined_terms,
+                          self.simulator, self._root(obs), self.model.encode)  # fmt: skip
+        out["timing/probe_ms"] = 1e3 * (time.perf_counter() - start)
+        return out
 
     def act(self, obs: np.ndarray, step: int) -> int:
         start = time.perf_counter()
         with self.model.evaluating():
             z0 = self.model.encode(torch.as_tensor(obs).unsqueeze(0))[0]
             check_finite("latent", z0)
-            action, info = self._plan(z0)
-        score = info.get("chosen_score", info.get("best_value", 0.0))
-        self._plan_logs = {"planner/score": score, "planner/entropy": info.get("entropy", 0.0),
-                           "timing/plan_ms": 1e3 * (time.perf_counter() - start)}  # fmt: skip
+            action, info = self._plan(z0, obs)
+            plan_ms = 1e3 * (time.perf_counter() - start)
+            logs = {"planner/score": info.get("chosen_score", info.get("best_value", 0.0)),
+                    "planner/entropy": info.get("entropy", 0.0), "timing/plan_ms": plan_ms}  # fmt: skip
+            logs.update({f"planner/{k}": v for k, v in info.items()
+                         if k.startswith(("spread/", "p_first/")) or k == "first_action_entropy"})  # fmt: skip
+            logs.update(self._score_noise(z0, obs))
+            logs.update(self._probe(z0, obs, step))
+        self._tally(logs)
+        self._plan_logs = logs
         return action
 
     # ------------------------------------------------------------------ learning
@@ -117,18 +196,31 @@ class PaperAgent(Agent):
             r_int, parts = cur.from_latents(z[:1], a, z[1:])
             cur.observe_latents(z[:1], a, z[1:])
             logs.update(parts, **{"intrinsic/reward": float(r_int[0])})
-        if self._refresh_due(step):
+        if self._refresh_due(step, logs):
             start = time.perf_counter()
             cur.refresh()
             logs.update(getattr(cur.estimator, "logs", {}), **{"timing/refresh_ms": 1e3 * (time.perf_counter() - start)})
+            logs["memory/refreshed"] = 1.0
+        elif cur.ready:
+            logs["memory/refreshed"] = 0.0
+        self._tally({k: v for k, v in logs.items() if k.startswith("memory/")})
         iterations = self.schedule.iterations(step)
         if iterations:
             logs.update(self._train(iterations))
         return logs
 
-    def _refresh_due(self, step: int) -> bool:
+    def _refresh_due(self, step: int, logs: dict[str, float]) -> bool:
+        """Every ``memory_refresh_every`` env steps from the end of the warm-up, and in between whenever the memory's
+        drift (:meth:`LatentCuriosity.drift`, logged as ``memory/drift``) exceeds ``memory_refresh_drift`` (> 0)."""
         since = step + 1 - self.cfg.budget.warmup_steps
-        return since >= 0 and since % self.cfg.memory_refresh_every == 0
+        if since < 0:
+            return False
+        if since % self.cfg.memory_refresh_every == 0:
+            return True
+        if self.cfg.memory_refresh_drift > 0 and self.curiosity.ready:
+            logs["memory/drift"] = self.curiosity.drift()
+            return logs["memory/drift"] > self.cfg.memory_refresh_drift
+        return False
 
     def _train(self, iterations: int) -> dict[str, float]:
         start = time.perf_counter()
@@ -178,7 +270,7 @@ class PaperAgent(Agent):
             "model": self.model.state_dict(), "q": self.q.state_dict() if self.q else None,
             "optimizer": self.optimizer.state_dict(), "replay": self.replay.state_dict(),
             "curiosity": self.curiosity.state_dict(), "schedule": self.schedule.state_dict(),
-            "rng": self.rng.bit_generator.state, "generator": self.generator.get_state(),
+            "rng": self.rng.bit_generator.state, "generator": self.generator.get_state(), "totals": self.totals,
         }  # fmt: skip
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
@@ -191,3 +283,4 @@ class PaperAgent(Agent):
         self.schedule.load_state_dict(state["schedule"])
         self.rng.bit_generator.state = state["rng"]
         self.generator.set_state(state["generator"])
+        self.totals = {k: list(v) for k, v in state.get("totals", {}).items()}

@@ -63,8 +63,9 @@ def representation_loss(
     """
     z, a1h = enc.z, enc.a1h
     targets = z[:, 1:].detach() if w.detach_targets else z[:, 1:]
-    l_trans = nstep_transition_loss(z[:, 0], a1h, targets, seg.terminateds, model.transition,
-                                    normalised=w.normalised_transition)  # fmt: skip
+    members = model.transition.members  # an ensemble trains each member on its own loss
+    l_trans = sum(nstep_transition_loss(z[:, 0], a1h, targets, seg.terminateds, member,
+                                        normalised=w.normalised_transition) for member in members) / len(members)  # fmt: skip
     check_finite("losses/transition", l_trans)
     l_reg, logs = regulariser(z[:, 0], a1h[:, 0], z[:, 1])
     check_finite("losses/entropy", l_reg)

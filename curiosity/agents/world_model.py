@@ -55,6 +55,22 @@ class WorldModel(nn.Module):
             self.train(was_training)
 
     @torch.no_grad()
+    def ensemble_disagreement(self, z: Tensor, a: Tensor) -> Tensor:
+        """mean_k ‖T_k(z, a) − mean_j T_j(z, a)‖² over the members of a transition ensemble (eval mode).
+
+        z (N, d), a (N,) long -> (N,). Zeros for a single transition model.
+        """
+        members = self.transition.members
+        if len(members) < 2:
+            return z.new_zeros(z.shape[0])
+        was_training = self.transition.training
+        self.transition.eval()
+        a1h = one_hot(a, self.n_actions).to(z.dtype)
+        preds = torch.stack([m(z, a1h) for m in members])
+        self.transition.train(was_training)
+        return (preds - preds.mean(0)).square().sum(-1).mean(0)
+
+    @torch.no_grad()
     def dropout_disagreement(self, z: Tensor, a: Tensor, samples: int) -> Tensor:
         """Expected squared error of T at (z, a) under MC dropout: mean_m ‖T_m(z, a) − T_eval(z, a)‖².
 

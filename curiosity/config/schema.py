@@ -36,6 +36,22 @@ class NoveltyInput(Enum):
     state = "state"
 
 
+class PEImagined(Enum):
+    dropout = "dropout"
+    ensemble = "ensemble"
+    off = "off"
+
+
+class TemperatureScale(Enum):
+    absolute = "absolute"
+    spread = "spread"
+
+
+class PlannerModel(Enum):
+    learned = "learned"
+    oracle = "oracle"
+
+
 class MemoryMode(Enum):
     exact = "exact"
     reservoir = "reservoir"
@@ -170,6 +186,8 @@ class MPCConfig:
     eta: float = 1.0
     max_candidates: int = 243
     n_actions: int = "${env.n_actions}"  # type: ignore[assignment]
+    temperature_scale: TemperatureScale = TemperatureScale.absolute
+    model: PlannerModel = PlannerModel.learned
 
 
 @dataclass
@@ -262,6 +280,11 @@ class Config:
     memory_mode: MemoryMode = MemoryMode.exact
     memory_size: int = 100_000
     memory_refresh_every: int = 10
+    # diagnostics and the agent study (issue 11)
+    transition_ensemble: int = 1
+    pe_imagined: PEImagined = PEImagined.dropout
+    memory_refresh_drift: float = 0.0
+    probe_every: int = 100
     # Q learning (planner=qtree)
     q_coef: float = 1.0
     q_target_every: int = 1000

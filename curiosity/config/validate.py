@@ -7,6 +7,8 @@ from typing import Any
 
 from omegaconf import DictConfig, OmegaConf
 
+from curiosity.config.build import choice
+
 
 class ConfigError(ValueError):
     """An invalid configuration value; the message names each key, its value and what is allowed."""
@@ -67,6 +69,9 @@ RULES: list[Rule] = [
     ("planner.temperature", lambda v: v >= 0, "a number >= 0 (0 = argmax)"),
     ("planner.eta", lambda v: v >= 0, "a number >= 0"),
     ("planner.max_candidates", lambda v: v >= 1, "an integer >= 1"),
+    ("transition_ensemble", lambda v: v >= 1, "an integer >= 1 (1: one transition model)"),
+    ("memory_refresh_drift", lambda v: v >= 0, "a number >= 0 (0: refresh on the schedule only)"),
+    ("probe_every", lambda v: v >= 0, "an integer >= 0 (0: no model probe)"),
 ]
 
 
@@ -80,6 +85,8 @@ def _cross_field_errors(cfg: DictConfig) -> list[str]:
     k = OmegaConf.select(cfg, "estimator.k", default=None)
     if k is not None and k >= cfg.budget.warmup_steps:
         errors.append(f"estimator.k={k}: must be < budget.warmup_steps={cfg.budget.warmup_steps} (the first memory)")
+    if choice(cfg.pe_imagined) == "ensemble" and cfg.transition_ensemble < 2:
+        errors.append(f"pe_imagined=ensemble: needs transition_ensemble >= 2, got {cfg.transition_ensemble}")
     if cfg.budget.warmup_steps < cfg.n_step:
         errors.append(f"budget.warmup_steps={cfg.budget.warmup_steps}: must be >= n_step={cfg.n_step} (segments to sample)")
     if cfg.budget.max_steps <= cfg.budget.warmup_steps:

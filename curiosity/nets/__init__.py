@@ -5,7 +5,7 @@ from curiosity.nets.encoders import ConvEncoder, MLPEncoder, tanh_mlp
 from curiosity.nets.onehot import one_hot
 from curiosity.nets.q import QNetwork
 from curiosity.nets.reward import RewardModel
-from curiosity.nets.transition import ResidualTransition
+from curiosity.nets.transition import ResidualTransition, TransitionEnsemble
 
 __all__ = [
     "BackwardPredictor",
@@ -14,6 +14,7 @@ __all__ = [
     "QNetwork",
     "ResidualTransition",
     "RewardModel",
+    "TransitionEnsemble",
     "one_hot",
     "tanh_mlp",
 ]

@@ -1,22 +1,26 @@
-"""Sampling MPC over discrete action sequences in the learned latent model (paper §3.9, eq. 39–41)."""
+"""Sampling MPC over discrete action sequences in the learned latent model or the simulator (paper §3.9, eq. 39–41)."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 
 import torch
 from torch import Tensor
 
-StepFn = Callable[[Tensor, Tensor], Tensor]
+from curiosity.planning.rollout import LatentRollout, Rollout, StepFn
+
 ScoreFn = Callable[[Tensor, Tensor], Tensor]
+IntrinsicFn = Callable[[Tensor, Tensor, Tensor], Tensor | Mapping[str, Tensor]]
+TEMPERATURE_SCALES = ("absolute", "spread")
+PLANNER_MODELS = ("learned", "oracle")
 
 
 class MPCPlanner:
     """Score action sequences by Ĝ = Σ_{i<H} γ^i [R(ŷ_i) + η r_int(ŷ_i)], ŷ_i = [ŝ_i, a_i], sample one ∝ exp(Ĝ/τ).
 
-    ŝ_0 = z0 and ŝ_{i+1} = T(ŝ_i, a_i): every term is scored on the (latent, action) pair *before* stepping, so the
-    last action of a sequence is scored but never stepped. Candidates are all A^H sequences when A^H ≤
-    ``max_candidates``, else ``max_candidates`` sequences drawn uniformly (with replacement).
+    ŝ_0 = z0 and ŝ_{i+1} = T(ŝ_i, a_i): the reward term is scored on the (latent, action) pair before stepping, the
+    intrinsic term on the edge (ŝ_i, a_i, ŝ_{i+1}) (state novelty scores the state reached). Candidates are all A^H
+    sequences when A^H ≤ ``max_candidates``, else ``max_candidates`` sequences drawn uniformly (with replacement).
 
     Rollouts run in one batched call per depth. Candidates sharing a prefix share its rollout: at depth i only the
     distinct (prefix, a_i) pairs are scored and stepped (A + A² + … + A^H pairs for the full enumeration, 363 for
@@ -26,9 +30,13 @@ class MPCPlanner:
         horizon: H.
         gamma: discount γ.
         temperature: τ; τ ≤ 0 means argmax (ties to the lowest candidate index).
+        temperature_scale: ``absolute`` (softmax of Ĝ/τ) or ``spread`` (Ĝ standardised across the candidates first,
+            so τ does not depend on the scale of the scores, which moves by orders of magnitude while latents grow).
         eta: intrinsic weight η.
         max_candidates: enumeration limit / number of sampled sequences.
         n_actions: A.
+        model: where imagined futures come from: ``learned`` (the world model) or ``oracle`` (the real simulator,
+            rendered and encoded: the upper bound a learned model is measured against). The agent builds the rollout.
     """
 
     uses_q = False  # whether the agent must train a Q-function for this planner
@@ -41,6 +49,8 @@ class MPCPlanner:
         eta: float = 1.0,
         max_candidates: int = 243,
         n_actions: int = 3,
+        temperature_scale: str = "absolute",
+        model: str = "learned",
     ) -> None:
         if horizon < 1 or n_actions < 1 or max_candidates < 1:
             raise ValueError("horizon, n_actions and max_candidates must be >= 1")
@@ -50,6 +60,11 @@ class MPCPlanner:
         self.eta = eta
         self.max_candidates = max_candidates
         self.n_actions = n_actions
+        if temperature_scale not in TEMPERATURE_SCALES:
+            raise ValueError(f"planner.temperature_scale must be one of {TEMPERATURE_SCALES}, got {temperature_scale!r}")
+        if model not in PLANNER_MODELS:
+            raise ValueError(f"planner.model must be one of {PLANNER_MODELS}, got {model!r}")
+        self.temperature_scale, self.model = temperature_scale, model
 
     def candidates(self, generator: torch.Generator | None = None) -> Tensor:
         """Candidate action sequences.
@@ -65,70 +80,121 @@ class MPCPlanner:
             return torch.div(codes, powers, rounding_mode="floor") % self.n_actions
         return torch.randint(self.n_actions, (self.max_candidates, self.horizon), generator=generator)
 
-    def scores(self, z0: Tensor, seqs: Tensor, step_fn: StepFn, reward_fn: ScoreFn | None, intrinsic_fn: ScoreFn) -> Tensor:
-        """Discounted returns Ĝ of each sequence.
+    def score_terms(
+        self,
+        z0: Tensor,
+        seqs: Tensor,
+        step_fn: StepFn,
+        reward_fn: ScoreFn | None,
+        intrinsic_fn: IntrinsicFn,
+        rollout: Rollout | None = None,
+    ) -> dict[str, Tensor]:
+        """Discounted returns of each sequence, term by term; Ĝ is their sum.
 
         Args:
             z0: (d,) current latent.
             seqs: (N, H) long action sequences.
-            step_fn: T(z (M, d), a (M,) long) -> (M, d).
+            step_fn: T(z (M, d), a (M,) long) -> (M, d), the imagined futures unless ``rollout`` is given.
             reward_fn: R(z (M, d), a (M,) long) -> (M,), or None for zero extrinsic reward.
-            intrinsic_fn: r_int(z (M, d), a (M,) long) -> (M,).
+            intrinsic_fn: r_int(z (M, d), a (M,) long, z_next (M, d)) -> (M,), or a mapping of named terms (M,) each
+                whose sum is r_int (e.g. ``novelty`` and ``pe``).
+            rollout: where the futures come from (:mod:`curiosity.planning.rollout`); default the learned model.
 
         Returns:
-            (N,) Ĝ.
+            term name -> (N,) Σ_i γ^i term_i: ``reward`` (R), and η × each intrinsic term (``intrinsic`` when
+            ``intrinsic_fn`` returns one tensor).
         """
         seqs = seqs.to(z0.device)
+        rollout = LatentRollout(z0, step_fn) if rollout is None else rollout
         node = torch.zeros(seqs.shape[0], dtype=torch.long, device=z0.device)
-        latents = z0.unsqueeze(0)
-        returns = torch.zeros(seqs.shape[0], dtype=z0.dtype, device=z0.device)
+        terms: dict[str, Tensor] = {}
         for i in range(seqs.shape[1]):
             pairs, child = torch.unique(node * self.n_actions + seqs[:, i], return_inverse=True)
-            z, a = latents[pairs // self.n_actions], pairs % self.n_actions
-            score = self.eta * intrinsic_fn(z, a)
+            parents, a = pairs // self.n_actions, pairs % self.n_actions
+            z = rollout.latents()[parents]
+            z_next = rollout.expand(parents, a)
+            parts = intrinsic_fn(z, a, z_next)
+            parts = {"intrinsic": parts} if isinstance(parts, Tensor) else dict(parts)
+            parts = {k: self.eta * v for k, v in parts.items()}
             if reward_fn is not None:
-                score = score + reward_fn(z, a)
-            returns = returns + self.gamma**i * score[child]
-            if i + 1 < seqs.shape[1]:
-                latents = step_fn(z, a)
+                parts["reward"] = reward_fn(z, a)
+            for key, value in parts.items():
+                previous = terms.get(key, torch.zeros(seqs.shape[0], dtype=z0.dtype, device=z0.device))
+                terms[key] = previous + self.gamma**i * value[child]
             node = child
-        return returns
+        return terms
+
+    def scores(self, z0: Tensor, seqs: Tensor, step_fn: StepFn, reward_fn: ScoreFn | None, intrinsic_fn: IntrinsicFn,
+               rollout: Rollout | None = None) -> Tensor:  # fmt: skip
+        """Ĝ of each sequence, (N,): the sum of :meth:`score_terms` (same arguments)."""
+        return _total(self.score_terms(z0, seqs, step_fn, reward_fn, intrinsic_fn, rollout))
+
+    def choose(self, returns: Tensor, generator: torch.Generator | None = None) -> tuple[int, Tensor, float]:
+        """Index of the chosen sequence, the (N,) choice probabilities, and their entropy in nats.
+
+        τ ≤ 0: argmax (ties to the lowest index), probabilities one-hot. ``temperature_scale=spread``: softmax of
+        (Ĝ − mean Ĝ) / (std Ĝ · τ), so τ is in units of the candidates' own spread of scores; ``absolute``: Ĝ/τ.
+        """
+        if self.temperature <= 0:
+            index = int(torch.argmax(returns))
+            probs = torch.zeros_like(returns)
+            probs[index] = 1.0
+            return index, probs, 0.0
+        logits = returns
+        if self.temperature_scale == "spread":
+            logits = (returns - returns.mean()) / returns.std(correction=0).clamp_min(1e-12)
+        log_probs = torch.log_softmax(logits / self.temperature, dim=0)
+        probs = log_probs.exp()
+        index = int(torch.multinomial(probs.cpu(), 1, generator=generator))
+        return index, probs, float(-(probs * log_probs).sum())
+
+    def first_action_probs(self, seqs: Tensor, probs: Tensor) -> Tensor:
+        """(A,) probability of each first action under the choice probabilities ``probs`` (N,) of ``seqs`` (N, H)."""
+        return torch.zeros(self.n_actions, dtype=probs.dtype).index_add_(0, seqs[:, 0].cpu(), probs.cpu())
 
     def plan(
         self,
         z0: Tensor,
         step_fn: StepFn,
         reward_fn: ScoreFn | None,
-        intrinsic_fn: ScoreFn,
+        intrinsic_fn: IntrinsicFn,
         generator: torch.Generator | None = None,
+        rollout: Rollout | None = None,
     ) -> tuple[int, dict[str, float]]:
-        """Choose the first action of a sequence sampled from softmax(Ĝ/τ).
+        """Choose the first action of a sequence drawn from softmax(Ĝ/τ) (argmax for τ ≤ 0).
 
         Args:
             z0: (d,) current latent.
             step_fn: T(z (M, d), a (M,) long) -> (M, d), run in eval mode by the caller.
             reward_fn: R(z, a) -> (M,), or None.
-            intrinsic_fn: r_int(z, a) -> (M,).
+            intrinsic_fn: r_int(z, a, z_next) -> (M,) or a mapping of named terms (see :meth:`score_terms`).
             generator: RNG for candidate sampling and the softmax draw (CPU generator for CPU tensors).
+            rollout: where the futures come from; default the learned model through ``step_fn``.
 
         Returns:
-            (action, info) with info keys ``best_score``, ``chosen_score``, ``entropy`` (nats, of the softmax over
-            candidates; 0 for argmax) and ``n_candidates``.
+            (action, info) with info keys ``best_score``, ``chosen_score``, ``entropy`` (nats, of the choice over
+            candidates; 0 for argmax), ``first_action_entropy`` (nats, of the first action's marginal),
+            ``p_first/<a>``, ``n_candidates``, ``spread/<term>`` (std across candidates of each term's return) and
+            ``spread/score``.
         """
         with torch.no_grad():
             seqs = self.candidates(generator)
-            returns = self.scores(z0, seqs, step_fn, reward_fn, intrinsic_fn)
-            if self.temperature <= 0:
-                index, entropy = int(torch.argmax(returns)), 0.0
-            else:
-                log_probs = torch.log_softmax(returns / self.temperature, dim=0)
-                probs = log_probs.exp()
-                index = int(torch.multinomial(probs.cpu(), 1, generator=generator))
-                entropy = float(-(probs * log_probs).sum())
+            terms = self.score_terms(z0, seqs, step_fn, reward_fn, intrinsic_fn, rollout)
+            returns = _total(terms)
+            index, probs, entropy = self.choose(returns, generator)
+            first = self.first_action_probs(seqs, probs)
         info = {
             "best_score": float(returns.max()),
             "chosen_score": float(returns[index]),
             "entropy": entropy,
+            "first_action_entropy": float(-(first * first.clamp_min(1e-30).log()).sum()),
             "n_candidates": float(seqs.shape[0]),
+            "spread/score": float(returns.std(correction=0)),
+            **{f"spread/{k}": float(v.std(correction=0)) for k, v in terms.items()},
+            **{f"p_first/{a}": float(p) for a, p in enumerate(first)},
         }
         return int(seqs[index, 0]), info
+
+
+def _total(terms: dict[str, Tensor]) -> Tensor:
+    return torch.stack(list(terms.values())).sum(0)

@@ -17,8 +17,10 @@ from tqdm import tqdm
 from curiosity.agents.base import Agent
 from curiosity.config import ConfigError, build, validate
 from curiosity.envs import GridCoverage, make_env, physical_state
+from curiosity.envs.directed import directed_action_fn
 from curiosity.envs.state import env_state, restore_env
 from curiosity.errors import NumericalFault, RunDirectoryError
+from curiosity.runtime.behaviour import BehaviourTracker
 from curiosity.runtime.checkpoint import RunLock, load_checkpoint, rng_states, save_checkpoint, set_rng_states
 from curiosity.runtime.logger import RunLogger
 from curiosity.runtime.seeding import seed_everything
@@ -115,12 +117,14 @@ class _Run:
         seed_everything(cfg.seed, deterministic=cfg.deterministic, threads=cfg.threads)
         self.env = make_env(cfg.env, cfg.budget.max_steps)
         self.agent: Agent = build(cfg.baseline, cfg=cfg)
+        self.agent.attach_env(self.env)
+        self.behaviour = BehaviourTracker(int(self.env.action_space.n), directed_action_fn(cfg.env.id))
         self.coverage = GridCoverage(cfg.env.coverage_low, cfg.env.coverage_high, cfg.env.coverage_bins)
         self.rng = np.random.default_rng(cfg.seed)
         self.step, self.steps_to_goal, self.wall_before = 0, None, 0.0
         self.stop_signal: int | None = None
         self._start: float | None = None  # perf_counter at the start of execute()
-        columns = [*CHART_KEYS, *self.agent.metric_keys]
+        columns = [*CHART_KEYS, *self.behaviour.keys, *self.agent.metric_keys]
         if ckpt is None:
             self.obs, _ = self.env.reset(seed=cfg.seed)
             self.env.action_space.seed(cfg.seed)
@@ -135,6 +139,7 @@ class _Run:
         restore_env(self.env, ckpt["env"], self.cfg.seed)
         self.agent.load_state_dict(ckpt["agent"])
         self.coverage.load_state_dict(ckpt["coverage"])
+        self.behaviour.load_state_dict(ckpt["behaviour"])
         self.rng.bit_generator.state = ckpt["loop_rng"]
         set_rng_states(ckpt["rng"])
         self.obs, self.step, self.steps_to_goal = ckpt["obs"], int(ckpt["step"]), ckpt["steps_to_goal"]
@@ -147,8 +152,8 @@ class _Run:
         save_checkpoint(self.run_dir, {
             "config": identity(self.cfg), "step": self.step, "finished": finished, "obs": self.obs,
             "steps_to_goal": self.steps_to_goal, "env": env_state(self.env), "agent": self.agent.state_dict(),
-            "coverage": self.coverage.state_dict(), "loop_rng": self.rng.bit_generator.state, "rng": rng_states(),
-            "logger": self.logger.state_dict(), "wall_seconds": self._wall(),
+            "coverage": self.coverage.state_dict(), "behaviour": self.behaviour.state_dict(),
+            "loop_rng": self.rng.bit_generator.state, "rng": rng_states(), "logger": self.logger.state_dict(), "wall_seconds": self._wall(),
         })  # fmt: skip
 
     def _wall(self) -> float:
@@ -211,6 +216,7 @@ class _Run:
             action = int(self.rng.integers(self.env.action_space.n))
         else:
             action = self.agent.act(self.obs, step)
+            self.logger.record_many(self.behaviour.record(action, physical_state(self.env)))
         next_obs, reward, terminated, _, _ = self.env.step(action)
         self.logger.record_many(self.agent.observe(self.obs, action, float(reward), next_obs, bool(terminated), step))
         self.logger.record("charts/extrinsic_reward", float(reward))
@@ -233,4 +239,5 @@ class _Run:
             reached_goal=self.steps_to_goal is not None, env_steps=self.step, max_steps=budget.max_steps,
             warmup_steps=budget.warmup_steps, final_coverage=self.coverage.fraction, wall_seconds=wall,
             steps_per_second=self.step / max(wall, 1e-9), git_commit=commit, git_dirty=dirty,
+            behaviour=self.behaviour.summary(), agent=self.agent.summary(),
         )  # fmt: skip

@@ -5,7 +5,8 @@ from __future__ import annotations
 import json
 import os
 import subprocess
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
+from typing import Any
 from pathlib import Path
 
 _REPO = Path(__file__).resolve().parents[2]
@@ -28,7 +29,8 @@ class RunSummary:
     """The fields of ``summary.json``.
 
     ``steps_to_goal`` counts every env step, random warm-up included, up to and including the step that reached the
-    goal; it is ``None`` when the goal was not reached within ``max_steps`` (a censored run).
+    goal; it is ``None`` when the goal was not reached within ``max_steps`` (a censored run). ``behaviour`` and
+    ``agent`` are absent from runs made before they existed.
     """
 
     method: str
@@ -44,6 +46,8 @@ class RunSummary:
     steps_per_second: float
     git_commit: str
     git_dirty: bool
+    behaviour: dict[str, Any] | None = None  # BehaviourTracker.summary(): action frequencies, repeat and directed rates
+    agent: dict[str, Any] = field(default_factory=dict)  # the agent's own run totals (Agent.summary())
 
     def write(self, run_dir: str | Path) -> Path:
         """Write ``summary.json`` atomically (temporary file + rename)."""

@@ -1,0 +1,81 @@
+"""Where a planner's imagined futures come from: the learned latent model, or the real simulator (the oracle).
+
+A rollout holds the nodes of one depth of a search tree and expands them: ``expand(parents, actions)`` steps node
+``parents[j]`` with ``actions[j]`` and makes the results the new depth, whose latents ``latents()`` returns. The
+planner never sees anything but latents, so the same planner, novelty and scores run on either source.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Protocol
+
+import numpy as np
+import torch
+from torch import Tensor
+
+from curiosity.envs.simulator import Simulator, SimStates
+
+StepFn = Callable[[Tensor, Tensor], Tensor]
+EncodeFn = Callable[[Tensor], Tensor]
+
+
+class Rollout(Protocol):
+    """The nodes of one depth of a search tree."""
+
+    def latents(self) -> Tensor:
+        """(M, d) latents of the current depth's nodes."""
+        ...
+
+    def expand(self, parents: Tensor, actions: Tensor) -> Tensor:
+        """Step nodes ``parents`` (K,) long with ``actions`` (K,) long; the K results become the current depth.
+
+        Returns:
+            (K, d) their latents.
+        """
+        ...
+
+
+class LatentRollout:
+    """Imagined futures from the learned transition: ẑ' = T(ẑ, a) (the caller puts the model in eval mode).
+
+    Args:
+        z0: (d,) the current latent.
+        step_fn: T(z (M, d), a (M,) long) -> (M, d).
+    """
+
+    def __init__(self, z0: Tensor, step_fn: StepFn) -> None:
+        self.z, self.step_fn = z0.unsqueeze(0), step_fn
+
+    def latents(self) -> Tensor:
+        return self.z
+
+    def expand(self, parents: Tensor, actions: Tensor) -> Tensor:
+        self.z = self.step_fn(self.z[parents], actions)
+        return self.z
+
+
+class SimulatorRollout:
+    """True futures: the real simulator branched from the run's state, each observation encoded by the encoder.
+
+    Args:
+        simulator: a :class:`~curiosity.envs.simulator.Simulator` of the run's env.
+        root: the branch point (one state).
+        z0: (d,) the latent of the root's observation.
+        encode: observations (M, *obs_shape) -> latents (M, d) (the caller puts the model in eval mode).
+    """
+
+    def __init__(self, simulator: Simulator, root: SimStates, z0: Tensor, encode: EncodeFn) -> None:
+        self.simulator, self.states, self.encode = simulator, root, encode
+        self.z = z0.unsqueeze(0)
+        self.goal = np.zeros(1, dtype=bool)
+
+    def latents(self) -> Tensor:
+        return self.z
+
+    def expand(self, parents: Tensor, actions: Tensor) -> Tensor:
+        index = parents.cpu().numpy()
+        self.states, goal = self.simulator.step(self.states.take(index), actions.cpu().numpy())
+        self.goal = self.goal[index] | goal
+        self.z = self.encode(torch.as_tensor(self.states.obs, device=self.z.device))
+        return self.z
