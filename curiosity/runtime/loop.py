@@ -153,7 +153,8 @@ class _Run:
             "config": identity(self.cfg), "step": self.step, "finished": finished, "obs": self.obs,
             "steps_to_goal": self.steps_to_goal, "env": env_state(self.env), "agent": self.agent.state_dict(),
             "coverage": self.coverage.state_dict(), "behaviour": self.behaviour.state_dict(),
-            "loop_rng": self.rng.bit_generator.state, "rng": rng_states(), "logger": self.logger.state_dict(), "wall_seconds": self._wall(),
+            "loop_rng": self.rng.bit_generator.state, "rng": rng_states(), "logger": self.logger.state_dict(),
+            "wall_seconds": self._wall(),
         })  # fmt: skip
 
     def _wall(self) -> float:
