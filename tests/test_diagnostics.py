@@ -1,0 +1,209 @@
+"""Behaviour columns, the simulator branch, the model probe on a corridor whose answer is known, the oracle planner."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+from omegaconf import OmegaConf
+from torch import nn
+
+from curiosity.envs import make_env
+from curiosity.envs.directed import acrobot, directed_action_fn, mountaincar
+from curiosity.envs.simulator import Simulator
+from curiosity.planning import MPCPlanner
+from curiosity.planning.probe import probe_model, tree_latents
+from curiosity.planning.rollout import LatentRollout, SimulatorRollout
+from curiosity.runtime.behaviour import BehaviourTracker
+from curiosity.runtime.loop import run
+from tests.conftest import compose_cfg
+
+CHAIN = 61
+STEP = 2.0 / (CHAIN - 1)  # the chain's observation moves by this per cell
+
+
+# ----------------------------------------------------------------------------- behaviour
+def test_behaviour_tracker_counts_actions_repeats_and_directed_steps() -> None:
+    tracker = BehaviourTracker(3, acrobot)
+    rows = [tracker.record(a, np.array([0.0, 0.0, 0.0, v])) for a, v in [(2, 1.0), (2, -1.0), (0, -1.0), (1, 0.0)]]
+    assert rows[0]["behaviour/action_2"] == 1.0 and "behaviour/repeat" not in rows[0]
+    assert [r.get("behaviour/repeat") for r in rows[1:]] == [1.0, 0.0, 0.0]
+    assert [r.get("behaviour/directed") for r in rows] == [1.0, 0.0, 1.0, None]  # θ̇2 = 0: no directed action
+    summary = tracker.summary()
+    assert summary["action_freq"] == [0.25, 0.25, 0.5]
+    assert summary["repeat_rate"] == pytest.approx(1 / 3) and summary["directed_rate"] == pytest.approx(2 / 3)
+    restored = BehaviourTracker(3, acrobot)
+    restored.load_state_dict(tracker.state_dict())
+    assert restored.summary() == summary
+
+
+def test_random_actions_score_one_third_on_every_behaviour_rate() -> None:
+    rng = np.random.default_rng(0)
+    tracker = BehaviourTracker(3, mountaincar)
+    for _ in range(30_000):
+        tracker.record(int(rng.integers(3)), np.array([0.0, rng.normal()]))
+    s = tracker.summary()
+    assert s["repeat_rate"] == pytest.approx(1 / 3, abs=0.015) and s["directed_rate"] == pytest.approx(1 / 3, abs=0.015)
+    assert directed_action_fn("curiosity/Chain-v0") is None and directed_action_fn("Acrobot-v1") is acrobot
+
+
+# ----------------------------------------------------------------------------- simulator
+def test_simulator_branch_matches_the_real_env_frame_for_frame() -> None:
+    cfg = compose_cfg(["env.renderer=fast"])
+    env, sim = make_env(cfg.env, 100), Simulator(cfg.env)
+    obs, _ = env.reset(seed=3)
+    for a in (0, 2, 2):  # leave the rest state so that the frames move
+        obs, *_ = env.step(a)
+    states = sim.root(env, obs)
+    for a in (2, 0, 1, 2):
+        states, _ = sim.step(states, np.array([a]))
+        obs, *_ = env.step(a)
+        np.testing.assert_array_equal(states.physical[0], env.unwrapped.state)  # exact: the same float64 arithmetic
+        np.testing.assert_array_equal(states.obs[0], obs)  # exact: the same renderer on the same state
+
+
+# ----------------------------------------------------------------------------- probe on the corridor
+class Identity1D(nn.Module):
+    def forward(self, obs: torch.Tensor) -> torch.Tensor:
+        return obs.reshape(obs.shape[0], 1).double()
+
+
+def exact_step(z: torch.Tensor, a: torch.Tensor) -> torch.Tensor:
+    """The chain's true latent dynamics away from its walls (latent = observation)."""
+    return z + STEP * (a.double() - 1).unsqueeze(1)
+
+
+def blind_step(z: torch.Tensor, a: torch.Tensor) -> torch.Tensor:
+    return z.clone()
+
+
+def rightward(z: torch.Tensor, a: torch.Tensor, z_next: torch.Tensor) -> dict[str, torch.Tensor]:
+    return {"novelty": z_next[:, 0]}
+
+
+def chain_root(position: int):
+    cfg = compose_cfg(["env=chain", "encoder=mlp"])
+    env, sim = make_env(cfg.env, 100), Simulator(cfg.env)
+    obs, _ = env.reset(seed=0)
+    env.unwrapped.state = np.array([float(position)])
+    obs = np.array([2.0 * position / (CHAIN - 1) - 1.0], dtype=np.float32)
+    return sim, sim.root(env, obs), torch.tensor([float(obs[0])], dtype=torch.float64)
+
+
+def test_simulator_rollout_equals_an_exact_model_away_from_the_walls() -> None:
+    sim, root, z0 = chain_root(30)
+    true = tree_latents(SimulatorRollout(sim, root, z0, Identity1D()), 3, 4)
+    model = tree_latents(LatentRollout(z0, exact_step), 3, 4)
+    for zt, zm in zip(true, model, strict=True):
+        torch.testing.assert_close(zt, zm, atol=1e-6, rtol=0)  # float32 observations against float64 arithmetic
+
+
+def test_probe_gives_the_known_answers_for_an_exact_and_a_blind_model() -> None:
+    sim, root, z0 = chain_root(30)
+    planner = MPCPlanner(horizon=4, gamma=0.9, temperature=0.0)
+    exact = probe_model(planner, z0, exact_step, None, rightward, sim, root, Identity1D())
+    for k in range(1, 5):
+        assert exact[f"probe/effect_ratio/{k}"] == pytest.approx(1.0, abs=1e-5)
+        assert exact[f"probe/error/{k}"] == pytest.approx(0.0, abs=1e-6)
+    assert exact["probe/effect_true/1"] == pytest.approx(STEP * np.sqrt(2 / 3), rel=1e-5)  # spread of {−1, 0, 1}·STEP
+    assert exact["probe/spearman"] == pytest.approx(1.0, abs=1e-9) and exact["probe/agree"] == 1.0
+    blind = probe_model(planner, z0, blind_step, None, rightward, sim, root, Identity1D())
+    assert blind["probe/effect_ratio/3"] == 0.0 and blind["probe/error/1"] > 0
+    assert "probe/spearman" not in blind  # constant model scores: no rank correlation
+
+
+def test_probe_sees_the_wall_that_a_wall_free_model_misses() -> None:
+    sim, root, z0 = chain_root(CHAIN - 2)  # one cell from the right wall
+    planner = MPCPlanner(horizon=3, gamma=0.9, temperature=0.0)
+    out = probe_model(planner, z0, exact_step, None, rightward, sim, root, Identity1D())
+    assert out["probe/error/1"] == pytest.approx(0.0, abs=1e-6) and out["probe/error/3"] > 0
+    assert out["probe/effect_ratio/3"] > 1.0  # the model thinks the agent can go further than it can
+
+
+# ----------------------------------------------------------------------------- temperature relative to the spread
+def test_spread_temperature_ignores_the_scale_and_offset_of_scores() -> None:
+    planner = MPCPlanner(horizon=2, temperature=0.5, temperature_scale="spread")
+    g = torch.randn(9, generator=torch.Generator().manual_seed(0), dtype=torch.float64)
+    _, p1, h1 = planner.choose(g, torch.Generator().manual_seed(1))
+    _, p2, h2 = planner.choose(1e5 * g - 3e4, torch.Generator().manual_seed(1))
+    torch.testing.assert_close(p1, p2)
+    assert h1 == pytest.approx(h2)
+    absolute = MPCPlanner(horizon=2, temperature=0.5)
+    assert absolute.choose(1e5 * g, torch.Generator().manual_seed(1))[2] < 1e-6  # absolute τ: greedy at this scale
+
+
+# ----------------------------------------------------------------------------- in a run
+FAST = ["env.renderer=fast", "progress=false", "budget=smoke", "budget.max_steps=90", "budget.warmup_steps=40",
+        "probe_every=20"]  # fmt: skip
+
+
+def test_a_run_logs_behaviour_planner_and_probe_columns(tmp_path: Path) -> None:
+    summary = run(compose_cfg(FAST), tmp_path)
+    header = (tmp_path / "metrics.csv").read_text().splitlines()[0].split(",")
+    wanted = {"behaviour/action_0", "behaviour/repeat", "behaviour/directed", "planner/first_action_entropy",
+              "planner/spread/novelty", "planner/spread/pe", "planner/noise", "planner/noise_flip", "planner/p_first/2",
+              "probe/effect_ratio/3", "probe/spearman", "probe/agree"}  # fmt: skip
+    assert wanted <= set(header), wanted - set(header)
+    written = json.loads((tmp_path / "summary.json").read_text())
+    assert written["behaviour"]["agent_steps"] == 50 and len(written["behaviour"]["action_freq"]) == 3
+    assert "probe/effect_ratio/1" in written["agent"]["means"] and "planner/noise" in written["agent"]["means"]
+    assert summary.behaviour == written["behaviour"]
+
+
+@pytest.mark.parametrize("overrides", [["planner.model=oracle", "pe_imagined=off", "planner.temperature=0"],
+                                       ["transition_ensemble=3", "pe_imagined=ensemble", "planner.temperature_scale=spread",
+                                        "memory_refresh_drift=0.1", "transition_dropout=0"]])  # fmt: skip
+def test_oracle_ensemble_spread_and_drift_options_run(tmp_path: Path, overrides: list[str]) -> None:
+    summary = run(compose_cfg([*FAST, *overrides]), tmp_path)
+    assert summary.env_steps == 90
+    means = summary.agent["means"]
+    if "transition_ensemble=3" in overrides:
+        assert "memory/drift" in means and "planner/noise" not in means  # an ensemble is deterministic: no noise
+    else:
+        assert summary.agent["planner_model"] == "oracle"
+
+
+# ----------------------------------------------------------------------------- transition ensemble
+def test_ensemble_members_disagree_and_each_trains_on_its_own_loss() -> None:
+    from curiosity.agents.paper import build_world_model
+    from curiosity.agents.representation import Encoded, LossWeights, representation_loss
+    from curiosity.info.regularisers import NoRegulariser
+    from curiosity.nets import one_hot
+    from curiosity.types import SegmentBatch
+
+    torch.manual_seed(0)
+    cfg = compose_cfg(["env=chain", "encoder=mlp", "transition_ensemble=4", "transition_dropout=0", "internal_dim=2"])
+    model = build_world_model(cfg)
+    z, a = torch.randn(16, 2), torch.randint(0, 3, (16,))
+    assert bool((model.ensemble_disagreement(z, a) > 0).all())
+    single = build_world_model(compose_cfg(["env=chain", "encoder=mlp", "internal_dim=2"]))
+    assert bool((single.ensemble_disagreement(z, a) == 0).all())
+    zs, acts = torch.randn(8, 3, 2, requires_grad=True), torch.randint(0, 3, (8, 2))
+    seg = SegmentBatch(obs=torch.zeros(8, 3, 1), act=acts, rewards=torch.zeros(8, 2), terminateds=torch.zeros(8, 2))
+    loss, _ = representation_loss(model, seg, Encoded(zs, one_hot(acts, 3).float()), NoRegulariser(),
+                                  LossWeights(reward=0.0, detach_targets=True))  # fmt: skip
+    loss.backward()
+    grads = [m.net[0].weight.grad for m in model.transition.members]
+    assert all(g is not None and float(g.abs().sum()) > 0 for g in grads)
+    assert not torch.allclose(grads[0], grads[1])  # each member follows its own error
+
+
+# ----------------------------------------------------------------------------- the probe command
+def test_probe_command_on_a_run_directory_and_a_refusal(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from analysis.probe import main
+
+    run(compose_cfg([*FAST, "probe_every=0"]), tmp_path / "run")
+    (tmp_path / "run" / ".hydra").mkdir()
+    (tmp_path / "run" / ".hydra" / "config.yaml").write_text(OmegaConf.to_yaml(compose_cfg([*FAST, "probe_every=0"])))
+    assert main([str(tmp_path / "run"), "--states", "2", "--every", "2", "--json", str(tmp_path / "p.json")]) == 0
+    out = capsys.readouterr().out
+    assert "| 3 |" in out and "Spearman" in out
+    saved = json.loads((tmp_path / "p.json").read_text())
+    assert len(saved["states"]) == 2 and "probe/effect_ratio/1" in saved["means"]
+    (tmp_path / "run" / "checkpoint.pt").unlink()
+    assert main([str(tmp_path / "run")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "checkpoint.pt" in err[0]
