@@ -207,3 +207,10 @@ def test_probe_command_on_a_run_directory_and_a_refusal(tmp_path: Path, capsys: 
     assert main([str(tmp_path / "run")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "checkpoint.pt" in err[0]
+
+
+def test_pe_estimate_signal_is_measured_on_real_transitions(tmp_path: Path) -> None:
+    summary = run(compose_cfg([*FAST, "budget.max_steps=100", "transition_ensemble=3", "pe_imagined=ensemble",
+                               "transition_dropout=0", "log_every=10"]), tmp_path)  # fmt: skip
+    corr = summary.agent["means"]["intrinsic/pe_estimate_corr"]
+    assert -1.0 <= corr <= 1.0

@@ -21,10 +21,12 @@ Both running means are updated after use, once per env step.
 
 from __future__ import annotations
 
+from collections import deque
 from typing import Any
 
 import numpy as np
 import torch
+from scipy.stats import spearmanr
 from torch import Tensor
 
 from curiosity.agents.world_model import WorldModel
@@ -37,6 +39,7 @@ from curiosity.types import TransitionBatch
 
 NOVELTY_INPUTS = ("state_action", "state")
 PE_IMAGINED = ("dropout", "ensemble", "off")
+PE_WINDOW = 200  # real transitions in the signal check of the imagined prediction-error estimate
 CURIOSITY_KEYS = ("intrinsic/novelty", "intrinsic/pe", "intrinsic/pe_error", "intrinsic/memory_size")
 
 
@@ -79,6 +82,7 @@ class LatentCuriosity(IntrinsicReward):
         self.z_mean: Tensor | None = None
         self.z_std: Tensor | None = None
         self.ready = False
+        self.pe_pairs: deque[tuple[float, float]] = deque(maxlen=PE_WINDOW)
 
     # ------------------------------------------------------------------ memory
     def _std(self, z: Tensor) -> Tensor:
@@ -193,10 +197,27 @@ class LatentCuriosity(IntrinsicReward):
 
     @torch.no_grad()
     def observe_latents(self, z: Tensor, a: Tensor, z_next: Tensor) -> None:
-        """Fold real transitions into both prediction-error running means (after their rewards were used)."""
-        self.pe_real.update(self._true_error(z, a, z_next))
+        """Fold real transitions into both prediction-error running means (after their rewards were used), and keep
+        (estimate, true error) pairs for :meth:`pe_estimate_corr`."""
+        error = self._true_error(z, a, z_next)
+        self.pe_real.update(error)
+        if self.pe_imagined_kind == "off":
+            return
+        estimate = self._imagined_error(z, a)
         if self.imagined_alpha > 0:
-            self.pe_imagined.update(self._imagined_error(z, a))
+            self.pe_imagined.update(estimate)
+        self.pe_pairs.extend(zip(estimate.tolist(), error.tolist(), strict=True))
+
+    def pe_estimate_corr(self) -> float | None:
+        """Does the imagined prediction-error estimate carry signal? The Spearman correlation between the estimate
+        ê(s, a) and the true error ‖T(s, a) − s'‖² of the last ``PE_WINDOW`` real transitions, each taken before
+        the model trained on it; None with fewer than 20 pairs or a constant side (e.g. no dropout)."""
+        if len(self.pe_pairs) < 20:
+            return None
+        est, err = np.array(self.pe_pairs).T
+        if np.ptp(est) == 0 or np.ptp(err) == 0:
+            return None
+        return float(spearmanr(est, err).statistic)
 
     # ------------------------------------------------------------------ IntrinsicReward interface
     @torch.no_grad()
@@ -220,7 +241,7 @@ class LatentCuriosity(IntrinsicReward):
         est = getattr(self.estimator, "state_dict", None)
         return {"memory": self.memory.state_dict(), "pe_real": self.pe_real.state_dict(),
                 "pe_imagined": self.pe_imagined.state_dict(), "ready": self.ready, "z_mean": self.z_mean, "z_std": self.z_std,
-                "estimator": est() if est else None}  # fmt: skip
+                "estimator": est() if est else None, "pe_pairs": list(self.pe_pairs)}  # fmt: skip
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
         self.memory.load_state_dict(state["memory"])
@@ -228,6 +249,7 @@ class LatentCuriosity(IntrinsicReward):
         self.pe_imagined.load_state_dict(state["pe_imagined"])
         self.ready = bool(state["ready"])
         self.z_mean, self.z_std = state["z_mean"], state["z_std"]
+        self.pe_pairs = deque(state.get("pe_pairs", []), maxlen=PE_WINDOW)
         if state["estimator"] is not None:
             self.estimator.load_state_dict(state["estimator"])
         if self.ready:

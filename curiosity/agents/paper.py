@@ -33,10 +33,12 @@ from curiosity.replay import ReplayBuffer
 AGENT_KEYS = ("intrinsic/reward", "losses/q", "train/iterations", "planner/score", "planner/entropy",
               "planner/first_action_entropy", "planner/spread/score", "planner/spread/novelty", "planner/spread/pe",
               "planner/spread/reward", "planner/noise", "planner/noise_flip", "memory/drift", "memory/refreshed",
+              "intrinsic/pe_estimate_corr",
               "timing/train_ms", "timing/refresh_ms", "timing/plan_ms", "timing/probe_ms")  # fmt: skip
 # run means of these planner/probe columns go to summary.json ("agent")
 SUMMARY_KEYS = ("planner/first_action_entropy", "planner/noise", "planner/noise_flip", "probe/effect_ratio/1",
-                "probe/effect_ratio/3", "probe/spearman", "probe/agree", "memory/drift", "memory/refreshed")  # fmt: skip
+                "probe/effect_ratio/3", "probe/spearman", "probe/agree", "memory/drift", "memory/refreshed",
+                "intrinsic/pe_estimate_corr")  # fmt: skip
 
 
 def obs_shape_of(env_cfg: DictConfig) -> tuple[int, ...]:
@@ -196,6 +198,9 @@ class PaperAgent(Agent):
             r_int, parts = cur.from_latents(z[:1], a, z[1:])
             cur.observe_latents(z[:1], a, z[1:])
             logs.update(parts, **{"intrinsic/reward": float(r_int[0])})
+            corr = cur.pe_estimate_corr() if (step + 1) % self.cfg.log_every == 0 else None
+            if corr is not None:
+                logs["intrinsic/pe_estimate_corr"] = corr
         if self._refresh_due(step, logs):
             start = time.perf_counter()
             cur.refresh()
@@ -203,7 +208,7 @@ class PaperAgent(Agent):
             logs["memory/refreshed"] = 1.0
         elif cur.ready:
             logs["memory/refreshed"] = 0.0
-        self._tally({k: v for k, v in logs.items() if k.startswith("memory/")})
+        self._tally({k: v for k, v in logs.items() if not k.startswith(("planner/", "probe/"))})  # act() tallied those
         iterations = self.schedule.iterations(step)
         if iterations:
             logs.update(self._train(iterations))
