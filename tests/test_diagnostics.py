@@ -51,8 +51,10 @@ def test_random_actions_score_one_third_on_every_behaviour_rate() -> None:
 
 
 # ----------------------------------------------------------------------------- simulator
-def test_simulator_branch_matches_the_real_env_frame_for_frame() -> None:
-    cfg = compose_cfg(["env.renderer=fast"])
+@pytest.mark.parametrize("overrides", [["env.renderer=fast"], ["env.renderer=gym"], ["env=mountaincar"],
+                                       ["env.obs=state", "encoder=mlp"]])  # fmt: skip
+def test_simulator_branch_matches_the_real_env_frame_for_frame(overrides: list[str]) -> None:
+    cfg = compose_cfg(overrides)
     env, sim = make_env(cfg.env, 100), Simulator(cfg.env)
     obs, _ = env.reset(seed=3)
     for a in (0, 2, 2):  # leave the rest state so that the frames move
@@ -62,7 +64,7 @@ def test_simulator_branch_matches_the_real_env_frame_for_frame() -> None:
         states, _ = sim.step(states, np.array([a]))
         obs, *_ = env.step(a)
         np.testing.assert_array_equal(states.physical[0], env.unwrapped.state)  # exact: the same float64 arithmetic
-        np.testing.assert_array_equal(states.obs[0], obs)  # exact: the same renderer on the same state
+        np.testing.assert_array_equal(states.obs[0], obs)  # exact: the same wrappers on the same state
 
 
 # ----------------------------------------------------------------------------- probe on the corridor

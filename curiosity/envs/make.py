@@ -39,9 +39,12 @@ def _fast_frames(cfg: Any, max_steps: int) -> gym.Env:
 _RENDERERS: dict[str, Callable[[Any, int], gym.Env]] = {"gym": _gym_frames, "fast": _fast_frames}
 
 
+def _frames(cfg: Any, max_steps: int) -> gym.Env:
+    return NormalisePixels(_RENDERERS[choice(cfg.renderer)](cfg, max_steps))
+
+
 def _pixels(cfg: Any, max_steps: int) -> gym.Env:
-    env = _RENDERERS[choice(cfg.renderer)](cfg, max_steps)
-    return FrameStackObservation(NormalisePixels(env), stack_size=cfg.frame_stack)
+    return FrameStackObservation(_frames(cfg, max_steps), stack_size=cfg.frame_stack)
 
 
 def _state(cfg: Any, max_steps: int) -> gym.Env:
@@ -49,6 +52,26 @@ def _state(cfg: Any, max_steps: int) -> gym.Env:
 
 
 _OBS: dict[str, Callable[[Any, int], gym.Env]] = {"pixels": _pixels, "state": _state}
+_SINGLE_OBS: dict[str, Callable[[Any, int], gym.Env]] = {"pixels": _frames, "state": _state}
+
+
+def make_single_obs_env(cfg: Any, max_steps: int) -> gym.Env:
+    """The env of :func:`make_env` without the frame stack: one normalised frame (or the state vector) per step."""
+    return _SINGLE_OBS[choice(cfg.obs)](cfg, max_steps)
+
+
+def observe_state(env: gym.Env, raw_obs: Any) -> np.ndarray:
+    """What ``env``'s observation wrappers make of the raw observation ``raw_obs`` of its core env in its current
+    physical state: the same code path as a real step (pixel wrappers render from the state and ignore ``raw_obs``)."""
+    chain = []
+    while isinstance(env, gym.Wrapper):
+        if isinstance(env, gym.ObservationWrapper):
+            chain.append(env)
+        env = env.env
+    obs = raw_obs
+    for wrapper in reversed(chain):
+        obs = wrapper.observation(obs)
+    return np.asarray(obs)
 
 
 def make_env(cfg: Any, max_steps: int) -> gym.Env:

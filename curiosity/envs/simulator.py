@@ -3,9 +3,10 @@
 The oracle-model planner and the model-quality probe need what the environment would really show after an action
 sequence, from the state the run is in. Classic-control envs hold their whole physical state in
 ``env.unwrapped.state`` and are deterministic given it (Acrobot's torque noise is 0), so one private copy of the env
-can be set to any state and stepped. Observations are made the way the run makes them: pixels are drawn from the
-physical state by the fast renderer (gymnasium's own frames differ from it by 0.6 gray levels on average,
-``tests/test_envs.py``) and pushed onto a copy of the frame stack; state vectors are the env's own observation.
+can be set to any state and stepped. Observations go through the run's own observation wrappers (same renderer, same
+resizing and gray conversion, bit for bit), and frames are pushed onto a copy of the frame stack. The learned encoder
+must see imagined frames exactly as it sees real ones: frames of the other renderer (0.6 gray levels apart on
+average) moved the oracle's latents enough to swamp the novelty differences between candidates.
 """
 
 from __future__ import annotations
@@ -15,11 +16,9 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from hydra.utils import instantiate
 
 from curiosity.config.build import choice
-from curiosity.envs.make import physical_state
-from curiosity.envs.wrappers import normalise_pixels
+from curiosity.envs.make import make_single_obs_env, observe_state, physical_state
 
 
 @dataclass
@@ -41,14 +40,14 @@ class Simulator:
     """A private copy of a run's env that steps any physical state.
 
     Args:
-        env_cfg: the run's ``env`` node (``id``, ``obs``, ``frame_size``, ``fast_renderer``).
+        env_cfg: the run's ``env`` node.
     """
 
     def __init__(self, env_cfg: Any) -> None:
-        self.core = gym.make(env_cfg.id).unwrapped
-        self.core.reset(seed=0)
+        self.env: gym.Env = make_single_obs_env(env_cfg, max_steps=10**9)
+        self.env.reset(seed=0)
+        self.core = self.env.unwrapped
         self.pixels = choice(env_cfg.obs) == "pixels"
-        self.renderer = instantiate(env_cfg.fast_renderer, size=env_cfg.frame_size) if self.pixels else None
 
     def root(self, env: gym.Env, obs: np.ndarray) -> SimStates:
         """The branch point the run is at: its env's physical state and its current observation ``obs``."""
@@ -64,11 +63,9 @@ class Simulator:
             ob, _, terminated, _, _ = self.core.step(int(a))
             physical[i] = np.asarray(self.core.state, dtype=np.float64)
             goal[i] = bool(terminated)
-            obs[i] = self._next_obs(states.obs[i], ob, physical[i])
+            obs[i] = self._next_obs(states.obs[i], ob)
         return SimStates(physical, obs), goal
 
-    def _next_obs(self, obs: np.ndarray, env_obs: np.ndarray, physical: np.ndarray) -> np.ndarray:
-        if self.renderer is None:
-            return np.asarray(env_obs, dtype=np.float32)
-        frame = normalise_pixels(self.renderer(physical))
-        return np.concatenate([obs[1:], frame[None]], axis=0)
+    def _next_obs(self, obs: np.ndarray, env_obs: np.ndarray) -> np.ndarray:
+        new = observe_state(self.env, env_obs).astype(np.float32)
+        return np.concatenate([obs[1:], new[None]], axis=0) if self.pixels else new
