@@ -96,7 +96,7 @@ def test_mpc_scores_pairs_before_stepping():
     planner = MPCPlanner(horizon=1, temperature=0.0)
     z0 = torch.tensor([2.0], dtype=torch.float64)
     scores = planner.scores(z0, planner.candidates(), poisoned_step, toy_reward, zero_intrinsic)
-    assert scores.tolist() == [2.0, 2.0, 4.5]
+    assert scores.tolist() == [2.0, 2.0, 4.5]  # exact: sums of binary fractions (IEEE 754, any CPU)
 
 
 def first_action_counts(planner, z0, reward, draws):
@@ -236,4 +236,4 @@ def test_qtree_edge_reward_sees_parent_action_and_child() -> None:
     torch.testing.assert_close(values, torch.tensor([0.0, 10.0, 20.0]))
     z, a, z_next = seen[0]
     assert torch.equal(z, torch.ones(3, 1)) and torch.equal(a, torch.arange(3))
-    assert torch.equal(z_next[:, 0], torch.tensor([1.0, 2.0, 3.0]))
+    assert torch.equal(z_next[:, 0], torch.tensor([1.0, 2.0, 3.0]))  # exact: integer sums
