@@ -60,9 +60,11 @@ def test_mpc_enumerates_all_sequences_lexicographically():
 
 
 def test_mpc_samples_candidates_beyond_the_limit():
-    planner = MPCPlanner(horizon=6, max_candidates=50, n_actions=3)
+    planner = MPCPlanner(horizon=6, max_candidates=50, n_actions=3, sample_candidates=True)
     seqs = planner.candidates(torch.Generator().manual_seed(0))
     assert seqs.shape == (50, 6) and seqs.min() >= 0 and seqs.max() <= 2
+    with pytest.raises(ValueError, match="sample_candidates"):  # sampling is asked for, never silent
+        MPCPlanner(horizon=6, max_candidates=50, n_actions=3)
 
 
 @pytest.mark.parametrize(("horizon", "max_candidates"), [(4, 81), (5, 40)])
@@ -81,7 +83,7 @@ def test_mpc_scores_match_brute_force_on_random_nets(horizon, max_candidates):
         y = torch.cat([z, one_hot(a, 3).double()], 1)
         return torch.cdist(y, memory).min(1).values
 
-    planner = MPCPlanner(horizon=horizon, gamma=0.8, eta=0.7, max_candidates=max_candidates)
+    planner = MPCPlanner(horizon=horizon, gamma=0.8, eta=0.7, max_candidates=max_candidates, sample_candidates=True)
     z0 = torch.randn(2, dtype=torch.float64)
     seqs = planner.candidates(torch.Generator().manual_seed(1))
     with torch.no_grad():

@@ -15,7 +15,7 @@ from omegaconf import DictConfig, OmegaConf
 from tqdm import tqdm
 
 from curiosity.agents.base import Agent
-from curiosity.config import ConfigError, build, validate
+from curiosity.config import ConfigError, build, sampled_candidates, validate
 from curiosity.envs import GridCoverage, make_env, physical_state
 from curiosity.envs.state import env_state, restore_env
 from curiosity.errors import NumericalFault, RunDirectoryError
@@ -233,4 +233,5 @@ class _Run:
             reached_goal=self.steps_to_goal is not None, env_steps=self.step, max_steps=budget.max_steps,
             warmup_steps=budget.warmup_steps, final_coverage=self.coverage.fraction, wall_seconds=wall,
             steps_per_second=self.step / max(wall, 1e-9), git_commit=commit, git_dirty=dirty,
+            planner_sampled_candidates=sampled_candidates(self.cfg),
         )  # fmt: skip

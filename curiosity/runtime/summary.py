@@ -29,6 +29,8 @@ class RunSummary:
 
     ``steps_to_goal`` counts every env step, random warm-up included, up to and including the step that reached the
     goal; it is ``None`` when the goal was not reached within ``max_steps`` (a censored run).
+    ``planner_sampled_candidates`` is the number of action sequences the MPC planner sampled per step when it could
+    not score all of them (``planner.sample_candidates=true``); ``None`` when it scored every one.
     """
 
     method: str
@@ -44,6 +46,7 @@ class RunSummary:
     steps_per_second: float
     git_commit: str
     git_dirty: bool
+    planner_sampled_candidates: int | None = None
 
     def write(self, run_dir: str | Path) -> Path:
         """Write ``summary.json`` atomically (temporary file + rename)."""
