@@ -4,6 +4,7 @@ with the same metrics.csv as an uninterrupted one; run directories are never sha
 from __future__ import annotations
 
 import csv
+import logging
 import os
 import signal
 import subprocess
@@ -13,7 +14,8 @@ from pathlib import Path
 
 import pytest
 
-from curiosity.errors import RunDirectoryError
+from curiosity.errors import CheckpointError, RunDirectoryError
+from curiosity.runtime.checkpoint import load_checkpoint, save_checkpoint
 from curiosity.runtime.logger import is_wall_clock
 from curiosity.runtime.loop import run
 from tests.conftest import REPO, compose_cfg, run_cli
@@ -65,6 +67,29 @@ def test_same_seed_same_metrics_and_killed_runs_resume_to_the_same_metrics(tmp_p
     assert metrics_without_wall_clock(killed) == reference
     steps = [int(r[0]) for r in metrics_without_wall_clock(killed)[1:]]
     assert steps == sorted(set(steps))  # no step twice, none missing
+
+    # A truncated last checkpoint: the run resumes from the one before (step 100) and ends with the same file again.
+    newest = killed / "checkpoint.pt"
+    newest.write_bytes(newest.read_bytes()[:1000])
+    res = run_cli([*ARGS, f"hydra.run.dir={killed}"], cwd=tmp_path)
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert "resuming from checkpoint.prev.pt at env step 100" in res.stdout + res.stderr
+    assert metrics_without_wall_clock(killed) == reference  # exact: determinism on one machine, as promised
+
+
+def test_an_unreadable_checkpoint_falls_back_to_the_previous_one(tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
+    for step in (10, 20):
+        save_checkpoint(tmp_path, {"config": {}, "step": step, "finished": False})
+    assert load_checkpoint(tmp_path)["step"] == 20 and (tmp_path / "checkpoint.prev.pt").is_file()
+    newest = tmp_path / "checkpoint.pt"
+    newest.write_bytes(newest.read_bytes()[:100])
+    with caplog.at_level(logging.WARNING):
+        assert load_checkpoint(tmp_path)["step"] == 10
+    assert "resuming from checkpoint.prev.pt at env step 10" in caplog.text
+    (tmp_path / "checkpoint.prev.pt").write_bytes(b"")
+    with pytest.raises(CheckpointError, match=r"checkpoint\.pt: cannot be read") as info:
+        load_checkpoint(tmp_path)
+    assert "EOFError" in str(info.value) and "move the run directory away" in str(info.value)
 
 
 def test_a_run_directory_of_another_config_is_refused(tmp_path: Path) -> None:

@@ -69,15 +69,16 @@ def _existing_checkpoint(cfg: DictConfig, run_dir: Path) -> dict[str, Any] | Non
     ckpt = load_checkpoint(run_dir)
     if ckpt is None:
         if (run_dir / "metrics.csv").exists():
-            raise RunDirectoryError(f"{run_dir} already holds a run without a checkpoint; it is not overwritten "
-                                    "(use another run directory)")  # fmt: skip
+            raise RunDirectoryError(f"{run_dir} already holds a run without a checkpoint; it is not overwritten; "
+                                    "allowed: another run directory (hydra.run.dir)")  # fmt: skip
         return None
     if not cfg.resume:
-        raise RunDirectoryError(f"{run_dir} holds a checkpoint at step {ckpt['step']}; resume=false refuses to "
-                                "overwrite it (use another run directory, or resume=true)")  # fmt: skip
+        raise RunDirectoryError(f"resume=false: {run_dir} holds a checkpoint at step {ckpt['step']}, not overwritten; "
+                                "allowed: resume=true (resumes or completes that run), or another run directory")  # fmt: skip
     diff = _differences(ckpt["config"], identity(cfg))
     if diff:
-        raise RunDirectoryError(f"{run_dir} holds a run of another configuration; not resuming it: " + "; ".join(diff[:5]))
+        raise RunDirectoryError(f"{run_dir} holds a run of another configuration ({', '.join(diff[:5])}); not resuming "
+                                "it; allowed: that run's configuration (resumes it), or another run directory")  # fmt: skip
     return ckpt
 
 
