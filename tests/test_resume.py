@@ -6,6 +6,7 @@ from __future__ import annotations
 import csv
 import logging
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -122,16 +123,24 @@ def test_a_live_writer_locks_its_run_directory(tmp_path: Path) -> None:
     assert run(compose_cfg([*ARGS, "budget.max_steps=50"]), tmp_path).env_steps == 50  # a dead owner's lock is stale
 
 
-def test_sigterm_checkpoints_and_the_same_command_resumes(tmp_path: Path) -> None:
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT])
+def test_a_signal_checkpoints_says_so_in_one_line_and_the_same_command_resumes(tmp_path: Path, signum: int) -> None:
     out = tmp_path / "run"
     env = {**os.environ, "PYTHONPATH": str(REPO)}
     cmd = [sys.executable, "-m", "runners.train", *ARGS, "progress=false", f"hydra.run.dir={out}"]
-    proc = subprocess.Popen(cmd, cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    proc = subprocess.Popen(cmd, cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     while proc.poll() is None and _rows(out / "metrics.csv") < 5:
         time.sleep(0.02)
-    proc.send_signal(signal.SIGTERM)
-    output, _ = proc.communicate(timeout=120)
-    assert proc.returncode != 0 and "run the same command again to resume" in output
+    proc.send_signal(signum)
+    stdout, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 128 + signum, stderr[-2000:]
+    assert "Traceback" not in stdout + stderr
+    step = _rows(out / "metrics.csv")  # the run stops at the step after the signal, not necessarily on a row
+    assert re.fullmatch(r"interrupted at step (\d+), checkpoint written; run the same command again to resume",
+                        stderr.strip().splitlines()[-1]), stderr[-2000:]  # fmt: skip
+    assert int(stderr.strip().splitlines()[-1].split()[3].rstrip(",")) >= 10 * step
+    log = (out / "train.log").read_text()
+    assert "running in" in log and f"signal {int(signum)} at env step" in log  # the run's log lines
     res = run_cli([*ARGS, f"hydra.run.dir={out}"], cwd=tmp_path)
     assert res.returncode == 0 and "resuming" in res.stdout + res.stderr
     assert int(metrics_without_wall_clock(out)[-1][0]) == 120

@@ -12,9 +12,6 @@ import random
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-import torch
-
 from curiosity.errors import CheckpointError, RunDirectoryError
 
 log = logging.getLogger(__name__)
@@ -25,12 +22,22 @@ LOCK = "run.lock"
 _KEYS = ("config", "step", "finished")  # what every checkpoint of a run holds
 
 
+# numpy and torch are imported where they are used: the command line checks run directories (lock_holder,
+# locked_error) before it imports them.
+
+
 def rng_states() -> dict[str, Any]:
     """The global generators: python, numpy, torch."""
+    import numpy as np
+    import torch
+
     return {"python": random.getstate(), "numpy": np.random.get_state(), "torch": torch.get_rng_state()}
 
 
 def set_rng_states(state: dict[str, Any]) -> None:
+    import numpy as np
+    import torch
+
     random.setstate(state["python"])
     np.random.set_state(state["numpy"])
     torch.set_rng_state(state["torch"])
@@ -42,6 +49,8 @@ def save_checkpoint(run_dir: str | Path, state: dict[str, Any]) -> Path:
     The checkpoint it replaces becomes ``checkpoint.prev.pt`` (renamed, not copied); :func:`load_checkpoint` falls
     back to it, also in the instant between the two renames.
     """
+    import torch
+
     path = Path(run_dir) / CHECKPOINT
     tmp = path.with_name(f".{CHECKPOINT}.{os.getpid()}.tmp")
     torch.save(state, tmp)
@@ -55,6 +64,8 @@ def save_checkpoint(run_dir: str | Path, state: dict[str, Any]) -> Path:
 
 def _read(path: Path) -> tuple[dict[str, Any] | None, str]:
     """(the checkpoint, "") or (None, why it cannot be read)."""
+    import torch
+
     try:
         state = torch.load(path, weights_only=False)
     except Exception as err:  # unpickling a damaged file can fail in many ways; all mean "unreadable"

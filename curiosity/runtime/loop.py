@@ -6,6 +6,7 @@ import json
 import logging
 import signal
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -34,7 +35,12 @@ VOLATILE_KEYS = ("progress", "threads", "resume", "checkpoint_every")
 class Interrupted(KeyboardInterrupt):
     """The run was stopped by SIGTERM/SIGINT after writing a checkpoint; re-run the same command to resume it.
 
-    A ``KeyboardInterrupt``, so a local sweep stops too instead of going on with its next job."""
+    A ``KeyboardInterrupt``, so a local sweep stops too instead of going on with its next job. Its message is the one
+    line the command prints; ``signum`` gives the exit status (128 + signum)."""
+
+    def __init__(self, signum: int, step: int) -> None:
+        self.signum, self.step = signum, step
+        super().__init__(f"interrupted at step {step}, checkpoint written; run the same command again to resume")
 
 
 def check_built(cfg: DictConfig) -> None:
@@ -64,7 +70,7 @@ def _differences(saved: dict[str, Any], now: dict[str, Any], prefix: str = "") -
     return out
 
 
-def _existing_checkpoint(cfg: DictConfig, run_dir: Path) -> dict[str, Any] | None:
+def existing_checkpoint(cfg: DictConfig, run_dir: Path) -> dict[str, Any] | None:
     """The checkpoint to resume from, None for a fresh directory; refuses anything else."""
     ckpt = load_checkpoint(run_dir)
     if ckpt is None:
@@ -82,22 +88,25 @@ def _existing_checkpoint(cfg: DictConfig, run_dir: Path) -> dict[str, Any] | Non
     return ckpt
 
 
-def run(cfg: DictConfig, run_dir: str | Path) -> RunSummary:
+def run(cfg: DictConfig, run_dir: str | Path, on_start: Callable[[], None] | None = None) -> RunSummary:
     """Run one experiment into ``run_dir`` (resuming it from its checkpoint if there is one) and return its summary.
 
     Validates the config before anything is built. The first ``budget.warmup_steps`` actions are uniformly random;
     every step counts towards steps-to-goal. A checkpoint is written every ``checkpoint_every`` env steps, at the end,
-    and on SIGTERM/SIGINT; re-running the same command resumes from it.
+    and on SIGTERM/SIGINT; re-running the same command resumes from it. ``on_start`` is called once the directory is
+    locked and checked, before a run starts or resumes (not for a complete run): nothing is written before.
     """
     validate(cfg)
     check_built(cfg)
     run_dir = Path(run_dir)
     with RunLock(run_dir):
-        ckpt = _existing_checkpoint(cfg, run_dir)
+        ckpt = existing_checkpoint(cfg, run_dir)
         if ckpt is not None and ckpt["finished"]:
             summary = RunSummary(**json.loads((run_dir / "summary.json").read_text()))
             log.info("%s seed=%d: already complete in %s", summary.method, summary.seed, run_dir)
             return summary
+        if on_start is not None:
+            on_start()
         summary = _Run(cfg, run_dir, ckpt).execute()
     goal = f"goal at step {summary.steps_to_goal}" if summary.reached_goal else "goal not reached"
     log.info(
@@ -200,8 +209,7 @@ class _Run:
                     self.save(finished=False)
                 if self.stop_signal is not None and not done:
                     self.save(finished=False)
-                    raise Interrupted(f"signal {self.stop_signal} at env step {self.step}: checkpoint written to "
-                                      f"{self.run_dir}; run the same command again to resume")  # fmt: skip
+                    raise Interrupted(self.stop_signal, self.step)
         finally:
             bar.close()
 
