@@ -7,6 +7,7 @@ changes nothing on disk; SIGTERM/SIGINT checkpoint the run and exit with 128 + t
 
 from __future__ import annotations
 
+import signal
 import sys
 
 import hydra
@@ -43,16 +44,11 @@ def cli() -> None:
         preflight(sys.argv[1:])
     except (RangeError, RunError) as err:
         _refuse(err)
-    from curiosity.runtime.loop import Interrupted
-
     try:
         main()
-    except Interrupted as stop:
-        print(stop, file=sys.stderr)
-        raise SystemExit(128 + stop.signum) from None
-    except KeyboardInterrupt:
-        print("interrupted before the run started; run the same command again to start it", file=sys.stderr)
-        raise SystemExit(130) from None
+    except KeyboardInterrupt as stop:  # the loop's Interrupted (after a checkpoint), or Ctrl-C before the loop began
+        print(str(stop) or "interrupted before the run started; run the same command again", file=sys.stderr)
+        raise SystemExit(128 + getattr(stop, "signum", signal.SIGINT)) from None
     except SystemExit as exit_:
         if exit_.code and LAST_SWEEP:
             failed = report_failures(LAST_SWEEP["dir"], LAST_SWEEP["start"])
