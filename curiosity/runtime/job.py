@@ -14,7 +14,7 @@ from pathlib import Path
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, OmegaConf
 
-from curiosity.config import ConfigError, sampled_candidates, validate
+from curiosity.config import ConfigError, sampled_candidates
 from curiosity.config.overrides import appended_key_errors
 from curiosity.errors import RunError
 from curiosity.runtime.loop import Interrupted, run
@@ -67,9 +67,8 @@ def run_job(cfg: DictConfig) -> float | None:
         errors = appended_key_errors(list(hydra.overrides.task), cfg, hydra.runtime.choices)
         if errors:
             raise ConfigError(errors)
-        validate(cfg)
         check_writable(run_dir, "run directory")
-        summary = run(cfg, run_dir, on_start=lambda: _start(cfg, run_dir))
+        summary = run(cfg, run_dir, on_start=lambda: _start(cfg, run_dir))  # validates cfg first
     except RunError:
         _detach_logs(run_dir)
         raise
