@@ -30,9 +30,10 @@ def run_dirs(root: str | Path) -> list[Path]:
 
 def all_run_dirs(root: str | Path) -> list[Path]:
     """Every run directory below ``root``, finished or not (``root`` itself included), sorted."""
-    root = Path(root)
-    found = {p.parent for name in RUN_MARKERS for p in root.rglob(Path(name).name) if (p.parent / name).exists()}
-    found = {d.parent if d.name == ".hydra" else d for d in found}
+    found = set()
+    for name in RUN_MARKERS:
+        depth = len(Path(name).parts)  # the run directory is this many levels above the file
+        found |= {p.parents[depth - 1] for p in Path(root).rglob(Path(name).name) if p.match(name)}
     return sorted(found)
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import signal
 import sys
+from typing import NoReturn
 
 import hydra
 from omegaconf import DictConfig
@@ -32,7 +33,8 @@ def main(cfg: DictConfig) -> float | None:
     return run_job(cfg)
 
 
-def _refuse(message: object) -> None:
+def _refuse(message: object) -> NoReturn:
+    """Print the one line of a refusal and exit with :data:`REFUSED`."""
     print(f"error: {message}", file=sys.stderr)
     raise SystemExit(REFUSED)
 

@@ -33,6 +33,9 @@ def sweep(tmp_path: Path) -> Path:
     refused = root / "acrobot" / "random" / "+foo=1" / "seed=0"
     refused.mkdir(parents=True)
     (refused / "FAILED.json").write_text(json.dumps({"error": "ConfigError: +foo=1: foo is not a key", "overrides": []}))
+    started = root / "acrobot" / "random" / "default" / "seed=0" / ".hydra"  # stopped before its first metrics row
+    started.mkdir(parents=True)
+    shutil.copy(next(root.rglob("seed=0/.hydra/config.yaml")), started / "config.yaml")
     return root
 
 
@@ -40,7 +43,8 @@ def test_collect_lists_every_run_with_its_status(sweep: Path) -> None:
     res = analysis("collect", sweep)
     assert res.returncode == 0, res.stderr
     lines = res.stdout.splitlines()
-    assert len(lines) == 6 and lines[-1] == "5 run(s): 3 complete, 1 failed, 1 stopped"
+    assert len(lines) == 7 and lines[-1] == "6 run(s): 3 complete, 1 failed, 2 stopped"
+    assert any("default/seed=0  before its first metrics row" in line for line in lines)
     assert any(line.startswith("stopped") and "seed=3  at env step 1990" in line for line in lines)
     assert any(line.startswith("failed") and "+foo=1" in line for line in lines)
 
@@ -63,7 +67,7 @@ def test_steps_table_lists_the_runs_not_finished(sweep: Path) -> None:
 def test_profile_of_a_sweep_root_profiles_each_run_finished_or_not(sweep: Path) -> None:
     res = analysis("profile", sweep)
     assert res.returncode == 0, res.stderr
-    assert res.stdout.count("  total ") == 4 and "(unfinished: up to env step 1990)" in res.stdout
+    assert res.stdout.count("  total ") == 4 and "(unfinished: up to env step 1990)" in res.stdout  # 4 with metrics
 
 
 def test_the_readme_results_command_prints_the_readme_table() -> None:
