@@ -1,30 +1,54 @@
-"""Steps-to-goal per method: every seed, successes/seeds, mean ± standard error.
+"""Steps-to-goal per method: every seed, successes/seeds, mean ± standard error, and the runs not finished.
 
-``python -m analysis.steps_table RUNS_ROOT [--markdown]``. Runs that hit the step cap are censored: they count in
-``seeds`` but not in ``reached``; the mean and SE are over the runs that reached the goal, and ``mean_capped``
+``python -m analysis.steps_table ROOT [ROOT ...] [--markdown]``. Runs that hit the step cap are censored: they count
+in ``seeds`` but not in ``reached``; the mean and SE are over the runs that reached the goal, and ``mean_capped``
 scores a censored run at its cap (a lower bound on the true mean). SE = sample SD / sqrt(n) (the paper's ±).
+Runs without ``summary.json`` (stopped, failed, running) are not in the statistics; each group counts them
+(``incomplete``) and every one is listed below the table. ``--markdown`` prints the table the README shows.
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import re
+import sys
 
 import pandas as pd
 
-from analysis.collect import load_summaries
+from analysis.collect import existing_roots, load_incomplete, load_summaries
+
+BY = ("env", "method", "variant")
 
 
-def steps_table(summaries: pd.DataFrame, by: tuple[str, ...] = ("env", "method", "variant")) -> pd.DataFrame:
-    """One row per group of ``by``: seeds, reached, per-seed steps, mean ± SE, mean with censored runs at cap."""
+def command(variant: str, seeds: list[int]) -> str:
+    """The command that runs a group's seeds: ``python -m runners.train [-m] <overrides> [seed=...]``."""
+    overrides = [] if variant == "default" else re.split(r",(?![^\[]*\])", variant)
+    if seeds != [0]:
+        contiguous = len(seeds) > 1 and seeds == list(range(seeds[0], seeds[-1] + 1))
+        overrides.append(f"seed={seeds[0]}-{seeds[-1]}" if contiguous else "seed=" + ",".join(map(str, seeds)))
+    return " ".join(["python -m runners.train", *(["-m"] if len(seeds) > 1 else []), *overrides])
+
+
+def _incomplete_counts(incomplete: pd.DataFrame | None) -> dict[tuple, int]:
+    if incomplete is None or incomplete.empty or not set(BY) <= set(incomplete):
+        return {}
+    return {tuple(k): len(g) for k, g in incomplete.groupby(list(BY), sort=True)}
+
+
+def steps_table(summaries: pd.DataFrame, by: tuple[str, ...] = BY, incomplete: pd.DataFrame | None = None) -> pd.DataFrame:
+    """One row per group of ``by``: seeds, reached, per-seed steps, mean ± SE, mean with censored runs at cap, the
+    command that runs the group, and how many of its runs are ``incomplete`` (rows of :func:`load_incomplete`)."""
+    unfinished = _incomplete_counts(incomplete) if by == BY else {}
     rows = []
     for key, g in summaries.groupby(list(by), sort=True):
+        key = key if isinstance(key, tuple) else (key,)
         g = g.sort_values("seed")
         reached = g[g["reached_goal"]]["steps_to_goal"].astype(float)
         capped = g["steps_to_goal"].where(g["reached_goal"], g["max_steps"]).astype(float)
         n = len(reached)
         rows.append({
-            **dict(zip(by, key if isinstance(key, tuple) else (key,), strict=True)),
+            **dict(zip(by, key, strict=True)),
             "seeds": len(g),
             "reached": n,
             "per_seed": " ".join(str(int(s)) if ok else f">{int(c)}" for s, ok, c in
@@ -33,27 +57,40 @@ def steps_table(summaries: pd.DataFrame, by: tuple[str, ...] = ("env", "method",
             "se": reached.std(ddof=1) / math.sqrt(n) if n > 1 else math.nan,
             "mean_capped": capped.mean(),
             "wall_seconds_mean": g["wall_seconds"].mean(),
+            "command": command(str(g["variant"].iloc[0]), [int(s) for s in g["seed"]]) if "variant" in g else "",
+            "incomplete": unfinished.get(key, 0),
         })  # fmt: skip
     return pd.DataFrame(rows)
 
 
+def to_markdown(table: pd.DataFrame) -> str:
+    """The README's table: method, command, seeds reaching the goal, steps-to-goal per seed, mean ± SE."""
+    lines = ["| method | command | seeds reaching the goal | steps-to-goal per seed | mean ± SE |", "|---|---|---|---|---|"]
+    for row in table.itertuples(index=False):
+        mean = "–" if math.isnan(row.mean) else f"{row.mean:.1f}" + ("" if math.isnan(row.se) else f" ± {row.se:.1f}")
+        seeds = f"{row.reached} / {row.seeds}" + (f" ({row.incomplete} more not finished)" if row.incomplete else "")
+        lines.append(f"| {row.method} | `{row.command}` | {seeds} | {row.per_seed.replace(' ', ', ')} | {mean} |")
+    return "\n".join(lines)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("root", help="directory holding run directories (searched recursively)")
-    parser.add_argument("--markdown", action="store_true", help="print a Markdown table")
+    parser.add_argument("roots", nargs="+", help="directories holding run directories (searched recursively)")
+    parser.add_argument("--markdown", action="store_true", help="print the README's Markdown table")
     args = parser.parse_args()
-    table = steps_table(load_summaries(args.root))
-    print(to_markdown(table) if args.markdown else table.to_string(index=False))
-
-
-def to_markdown(table: pd.DataFrame) -> str:
-    """A Markdown table (floats with one decimal)."""
-    def cell(v: object) -> str:
-        return f"{v:.1f}" if isinstance(v, float) else str(v)
-
-    lines = ["| " + " | ".join(table.columns) + " |", "|" + "---|" * len(table.columns)]
-    lines += ["| " + " | ".join(cell(v) for v in row) + " |" for row in table.itertuples(index=False)]
-    return "\n".join(lines)
+    roots = existing_roots(args.roots)
+    summaries = pd.concat([load_summaries(r) for r in roots], ignore_index=True)
+    incomplete = pd.concat([load_incomplete(r) for r in roots], ignore_index=True)
+    if summaries.empty and incomplete.empty:
+        print(f"error: no run directory below {' '.join(args.roots)}", file=sys.stderr)
+        raise SystemExit(1)
+    if not summaries.empty:
+        table = steps_table(summaries, incomplete=incomplete)
+        print(to_markdown(table) if args.markdown else table.to_string(index=False))
+    if not incomplete.empty:
+        print(f"\nNot finished (no summary.json), not in the table's statistics: {len(incomplete)} run(s)")
+        for row in incomplete.itertuples(index=False):
+            print(f"  {row.status}: {row.run_dir}  {row.detail}")
 
 
 if __name__ == "__main__":

@@ -83,6 +83,23 @@ def test_multirun_seed_range_gives_integer_seeds_and_one_dir_per_job(tmp_path: P
 def test_bad_input_fails_before_any_env_is_built(tmp_path: Path, args: list[str], key: str) -> None:
     out = tmp_path / "run"
     res = run_cli([*args, "baseline=random", f"hydra.run.dir={out}", f"hydra.sweep.dir={out}"], cwd=tmp_path)
-    assert res.returncode != 0
-    assert key in res.stdout + res.stderr
-    assert not list(tmp_path.rglob("metrics.csv"))
+    assert res.returncode == 2
+    assert res.stderr.startswith("error: ") and key in res.stderr and len(res.stderr.splitlines()) == 1
+    assert not out.exists()  # refused before Hydra made the run directory
+
+
+def test_help_lists_the_groups_a_user_sets_and_the_launchers(tmp_path: Path) -> None:
+    res = run_cli(["--help"], cwd=tmp_path)
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert "estimator: kde, knn" in res.stdout and "submitit_local" in res.stdout
+    assert "schema/" not in res.stdout  # the typed schemas are internal
+
+
+def test_a_sampling_planner_says_so_in_the_log_and_the_summary(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    args = ["planner.horizon=6", "planner.max_candidates=50", "planner.sample_candidates=true", "budget=smoke",
+            "budget.max_steps=70", "env.renderer=fast", f"hydra.run.dir={out}"]  # fmt: skip
+    res = run_cli(args, cwd=tmp_path)
+    assert res.returncode == 0, res.stderr[-3000:]
+    assert json.loads((out / "summary.json").read_text())["planner_sampled_candidates"] == 50
+    assert "scores 50 sampled sequences of the 3^6 per step" in (out / "train.log").read_text()

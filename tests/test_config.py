@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import re
+
 import pytest
 from hydra.errors import ConfigCompositionException
 from omegaconf import OmegaConf
 from omegaconf.errors import ConfigAttributeError, ValidationError
 
-from curiosity.config import ConfigError, validate
+from curiosity.config import ConfigError, sampled_candidates, validate
 from curiosity.config.ranges import RangeError, expand_ranges
 from tests.conftest import compose_cfg, group_options
 
@@ -33,7 +35,7 @@ def test_public_groups_and_options_exist() -> None:
 
 @pytest.mark.parametrize(("group", "option"), group_options())
 def test_every_option_composes_and_validates(group: str, option: str) -> None:
-    extra = ["env.obs=state"] if (group, option) == ("encoder", "mlp") else []
+    extra = {("encoder", "mlp"): ["env.obs=state"], ("env", "chain"): ["encoder=mlp"]}.get((group, option), [])
     cfg = compose_cfg([f"{group}={option}", *extra])
     resolved = OmegaConf.to_container(cfg, resolve=True)
     assert isinstance(resolved, dict)
@@ -125,3 +127,33 @@ def test_expand_ranges(argv: list[str], expected: list[str]) -> None:
 def test_bad_ranges_name_seed(arg: str) -> None:
     with pytest.raises(RangeError, match="seed="):
         expand_ranges([arg])
+
+
+@pytest.mark.parametrize(
+    ("overrides", "message"),
+    [
+        (["encoder=mlp"], "encoder=mlp: takes state observations, but env=acrobot has env.obs=pixels"),
+        (["env.obs=state"], "encoder=conv: takes pixel observations"),
+        (["env=chain"], "allowed: encoder=mlp with env.obs=state"),
+        (["env=chain", "encoder=mlp", "env.obs=pixels"], "env.obs=pixels: env=chain has no pixel observations"),
+        (["planner.horizon=20"], "planner.horizon=20: 3^20 = 3486784401 candidate sequences exceed planner.max_candidates"),
+        (["planner.horizon=6", "planner.max_candidates=700"], "allowed: planner.horizon <= 5"),
+        (["planner=qtree", "planner.horizon=11"], "planner.horizon=11: a depth-11 tree has 3^11 = 177147 leaves"),
+        (["baseline=nsrs", "baseline.settings.planner.horizon=0"], "baseline.settings.planner.horizon=0: must be"),
+        (["baseline=icm", "baseline.intrinsic.lr=abc"], "baseline.intrinsic.lr='abc': must be a learning rate > 0"),
+        (["baseline=rnd", "baseline.gamma=1.5"], "baseline.gamma=1.5: must be a discount in [0, 1]"),
+        (["env.obs=state", "encoder=mlp", "encoder.hidden=[64,0]"], "encoder.hidden=[64, 0]: must be"),
+    ],
+)
+def test_pairings_and_planner_sizes_are_checked(overrides: list[str], message: str) -> None:
+    with pytest.raises(ConfigError, match=re.escape(message)) as info:
+        validate(compose_cfg(overrides))
+    assert "\n" not in str(info.value)  # one line
+
+
+def test_mpc_samples_only_when_asked_and_says_how_many() -> None:
+    assert sampled_candidates(compose_cfg()) is None  # 3^3 = 27 sequences, all scored
+    cfg = compose_cfg(["planner.horizon=20", "planner.sample_candidates=true"])
+    validate(cfg)
+    assert sampled_candidates(cfg) == 243
+    assert sampled_candidates(compose_cfg(["planner=qtree"])) is None

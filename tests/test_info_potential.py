@@ -120,7 +120,7 @@ def test_nll_far_candidates_stay_finite(dtype):
     cand = torch.full((2, 4, 2), 100.0, dtype=dtype)
     out = backward_predictor_nll(y, cand, sigma_b=0.1)
     assert out.dtype == dtype
-    torch.testing.assert_close(out, torch.full((2,), 20000.0 / 0.02, dtype=dtype), rtol=1e-7, atol=0)
+    torch.testing.assert_close(out, torch.full((2,), 20000.0 / 0.02, dtype=dtype), rtol=1e-7, atol=1e-7)
 
 
 def test_nll_gradcheck_and_duplicates():

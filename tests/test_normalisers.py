@@ -81,15 +81,15 @@ def test_return_normaliser_hand_stream() -> None:
     norm = ReturnNormaliser(gamma=0.5, epsilon=0.0)
     first = norm.update_and_normalise(torch.tensor([1.0, 2.0], dtype=torch.float64))
     # statistics of {1, 2.5}: mean 1.75, var 0.5625, std 0.75; update-then-divide, no mean subtraction
-    assert norm.rms.var.item() == 0.5625
-    torch.testing.assert_close(first, torch.tensor([1.0, 2.0], dtype=torch.float64) / 0.75, rtol=1e-15, atol=0)
+    assert norm.rms.var.item() == 0.5625  # exact: binary fractions throughout (IEEE 754, any CPU)
+    torch.testing.assert_close(first, torch.tensor([1.0, 2.0], dtype=torch.float64) / 0.75, rtol=1e-15, atol=1e-15)
     second = norm.update_and_normalise(torch.tensor([3.0, 4.0], dtype=torch.float64))
     # statistics of {1, 2.5, 4.25, 6.125}: mean 3.46875, var 3.6748046875
-    assert norm.running_return.item() == 6.125
-    assert norm.rms.mean.item() == 3.46875
+    assert norm.running_return.item() == 6.125  # exact: binary fractions
+    assert norm.rms.mean.item() == 3.46875  # exact: binary fractions
     assert norm.rms.var.item() == pytest.approx(3.6748046875, rel=1e-14)
     std = math.sqrt(3.6748046875)
-    torch.testing.assert_close(second, torch.tensor([3.0 / std, 4.0 / std], dtype=torch.float64), rtol=1e-12, atol=0)
+    torch.testing.assert_close(second, torch.tensor([3.0 / std, 4.0 / std], dtype=torch.float64), rtol=1e-12, atol=1e-12)
 
 
 def test_return_normaliser_parallel_streams() -> None:
@@ -97,8 +97,8 @@ def test_return_normaliser_parallel_streams() -> None:
     norm = ReturnNormaliser(gamma=0.5, epsilon=0.0)
     norm.update(torch.tensor([[1.0, 0.0], [1.0, 2.0]]))
     assert torch.equal(norm.running_return, torch.tensor([1.5, 2.0], dtype=torch.float64))
-    assert norm.rms.mean.item() == 1.125
-    assert norm.rms.var.item() == 0.546875
+    assert norm.rms.mean.item() == 1.125  # exact: binary fractions
+    assert norm.rms.var.item() == 0.546875  # exact: binary fractions
     with pytest.raises(ValueError):
         norm.update(torch.ones(2, 3))
 

@@ -24,8 +24,8 @@ def test_exact_mode_keeps_everything_in_order():
     for start in range(0, 1000, 64):
         mem.add(data[start : start + 64])
     assert len(mem) == 1000 and mem.n_seen == 1000
-    torch.testing.assert_close(mem.tensor(), data, atol=0, rtol=0)
-    torch.testing.assert_close(mem.keys(), torch.arange(1000), atol=0, rtol=0)
+    torch.testing.assert_close(mem.tensor(), data, atol=0, rtol=0)  # exact: the memory holds copies of the rows added
+    torch.testing.assert_close(mem.keys(), torch.arange(1000), atol=0, rtol=0)  # exact: integer keys
 
 
 def test_exact_mode_fifo_capacity():
@@ -36,7 +36,7 @@ def test_exact_mode_fifo_capacity():
     mem.add(data[250:])
     assert len(mem) == 100
     assert sorted(mem.keys().tolist()) == list(range(250, 350))
-    torch.testing.assert_close(mem.tensor(), data[mem.keys()], atol=0, rtol=0)
+    torch.testing.assert_close(mem.tensor(), data[mem.keys()], atol=0, rtol=0)  # exact: copies of the rows added
 
 
 def test_reservoir_bounded_consistent_and_uniform():
@@ -47,7 +47,7 @@ def test_reservoir_bounded_consistent_and_uniform():
     keys = mem.keys()
     assert len(mem) == 2000 and mem.n_seen == 40_000
     assert len(set(keys.tolist())) == 2000  # no item stored twice
-    torch.testing.assert_close(mem.tensor(), data[keys], atol=0, rtol=0)  # every row is the item its key names
+    torch.testing.assert_close(mem.tensor(), data[keys], atol=0, rtol=0)  # exact: a copy of the item its key names
     # uniform over the stream: each tenth of the stream holds ~200 items (binomial sd ~ 13)
     counts = torch.bincount(keys // 4000, minlength=10)
     assert (counts - 200).abs().max().item() < 60, counts
@@ -70,7 +70,9 @@ def test_custom_keys_and_reembed():
     assert mem.keys().min().item() >= 1000
     mem.reembed(lambda k: new_encoder(obs[k - 1000]), batch_size=7)
     with torch.no_grad():
-        torch.testing.assert_close(mem.tensor(), new_encoder(obs[mem.keys() - 1000]), atol=0, rtol=0)
+        # Batches of 7 against one batch: a matrix product's rounding depends on the batch shape, the thread count and
+        # the CPU (1.2e-7 apart on an Intel Xeon), so equal up to float32 round-off, not bit for bit.
+        torch.testing.assert_close(mem.tensor(), new_encoder(obs[mem.keys() - 1000]), atol=1e-6, rtol=1e-5)
     fresh = torch.zeros(len(mem), 2)
     mem.replace(fresh)
     assert mem.tensor().abs().max().item() == 0.0
@@ -86,7 +88,7 @@ def test_state_dict_resumes_identically():
     b.load_state_dict(a.state_dict())
     a.add(data[1000:])
     b.add(data[1000:])
-    torch.testing.assert_close(a.tensor(), b.tensor(), atol=0, rtol=0)
+    torch.testing.assert_close(a.tensor(), b.tensor(), atol=0, rtol=0)  # exact: copies of one stream, same restored RNG
     assert a.keys().tolist() == b.keys().tolist()
     with pytest.raises(ValueError, match="state"):
         EmbeddingMemory(mode="exact").load_state_dict(a.state_dict())

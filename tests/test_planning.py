@@ -61,9 +61,11 @@ def test_mpc_enumerates_all_sequences_lexicographically():
 
 
 def test_mpc_samples_candidates_beyond_the_limit():
-    planner = MPCPlanner(horizon=6, max_candidates=50, n_actions=3)
+    planner = MPCPlanner(horizon=6, max_candidates=50, n_actions=3, sample_candidates=True)
     seqs = planner.candidates(torch.Generator().manual_seed(0))
     assert seqs.shape == (50, 6) and seqs.min() >= 0 and seqs.max() <= 2
+    with pytest.raises(ValueError, match="sample_candidates"):  # sampling is asked for, never silent
+        MPCPlanner(horizon=6, max_candidates=50, n_actions=3)
 
 
 @pytest.mark.parametrize(("horizon", "max_candidates"), [(4, 81), (5, 40)])
@@ -82,7 +84,7 @@ def test_mpc_scores_match_brute_force_on_random_nets(horizon, max_candidates):
         y = torch.cat([z, one_hot(a, 3).double()], 1)
         return torch.cdist(y, memory).min(1).values + torch.cos(z_next).sum(1)
 
-    planner = MPCPlanner(horizon=horizon, gamma=0.8, eta=0.7, max_candidates=max_candidates)
+    planner = MPCPlanner(horizon=horizon, gamma=0.8, eta=0.7, max_candidates=max_candidates, sample_candidates=True)
     z0 = torch.randn(2, dtype=torch.float64)
     seqs = planner.candidates(torch.Generator().manual_seed(1))
     with torch.no_grad():
@@ -97,7 +99,7 @@ def test_mpc_scores_rewards_before_stepping():
     planner = MPCPlanner(horizon=1, temperature=0.0)
     z0 = torch.tensor([2.0], dtype=torch.float64)
     scores = planner.scores(z0, planner.candidates(), poisoned_step, toy_reward, zero_intrinsic)
-    assert scores.tolist() == [2.0, 2.0, 4.5]
+    assert scores.tolist() == [2.0, 2.0, 4.5]  # exact: sums of binary fractions (IEEE 754, any CPU)
 
 
 def first_action_counts(planner, z0, reward, draws):
@@ -237,4 +239,4 @@ def test_qtree_edge_reward_sees_parent_action_and_child() -> None:
     torch.testing.assert_close(values, torch.tensor([0.0, 10.0, 20.0]))
     z, a, z_next = seen[0]
     assert torch.equal(z, torch.ones(3, 1)) and torch.equal(a, torch.arange(3))
-    assert torch.equal(z_next[:, 0], torch.tensor([1.0, 2.0, 3.0]))
+    assert torch.equal(z_next[:, 0], torch.tensor([1.0, 2.0, 3.0]))  # exact: integer sums

@@ -4,7 +4,9 @@ with the same metrics.csv as an uninterrupted one; run directories are never sha
 from __future__ import annotations
 
 import csv
+import logging
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -13,7 +15,8 @@ from pathlib import Path
 
 import pytest
 
-from curiosity.errors import RunDirectoryError
+from curiosity.errors import CheckpointError, RunDirectoryError
+from curiosity.runtime.checkpoint import load_checkpoint, save_checkpoint
 from curiosity.runtime.logger import is_wall_clock
 from curiosity.runtime.loop import run
 from tests.conftest import REPO, compose_cfg, run_cli
@@ -44,7 +47,7 @@ def test_same_seed_same_metrics_and_killed_runs_resume_to_the_same_metrics(tmp_p
         assert res.returncode == 0, res.stderr[-2000:]
     reference = metrics_without_wall_clock(first)
     assert len(reference) == 13  # header + steps 10..120
-    assert metrics_without_wall_clock(second) == reference  # determinism
+    assert metrics_without_wall_clock(second) == reference  # exact: determinism (same config, seed and machine), as promised
 
     # Kill -9 after the rows of env steps 30, 70 and 100 are written (wherever the run is then), resume each time.
     env = {**os.environ, "PYTHONPATH": str(REPO)}
@@ -62,9 +65,32 @@ def test_same_seed_same_metrics_and_killed_runs_resume_to_the_same_metrics(tmp_p
     res = run_cli([*ARGS, f"hydra.run.dir={killed}"], cwd=tmp_path)  # resume to the end
     assert res.returncode == 0, res.stderr[-2000:]
     assert kills >= 2
-    assert metrics_without_wall_clock(killed) == reference
+    assert metrics_without_wall_clock(killed) == reference  # exact: resumed = uninterrupted, on one machine
     steps = [int(r[0]) for r in metrics_without_wall_clock(killed)[1:]]
     assert steps == sorted(set(steps))  # no step twice, none missing
+
+    # A truncated last checkpoint: the run resumes from the one before (step 100) and ends with the same file again.
+    newest = killed / "checkpoint.pt"
+    newest.write_bytes(newest.read_bytes()[:1000])
+    res = run_cli([*ARGS, f"hydra.run.dir={killed}"], cwd=tmp_path)
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert "resuming from checkpoint.prev.pt at env step 100" in res.stdout + res.stderr
+    assert metrics_without_wall_clock(killed) == reference  # exact: determinism on one machine, as promised
+
+
+def test_an_unreadable_checkpoint_falls_back_to_the_previous_one(tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
+    for step in (10, 20):
+        save_checkpoint(tmp_path, {"config": {}, "step": step, "finished": False})
+    assert load_checkpoint(tmp_path)["step"] == 20 and (tmp_path / "checkpoint.prev.pt").is_file()
+    newest = tmp_path / "checkpoint.pt"
+    newest.write_bytes(newest.read_bytes()[:100])
+    with caplog.at_level(logging.WARNING):
+        assert load_checkpoint(tmp_path)["step"] == 10
+    assert "resuming from checkpoint.prev.pt at env step 10" in caplog.text
+    (tmp_path / "checkpoint.prev.pt").write_bytes(b"")
+    with pytest.raises(CheckpointError, match=r"checkpoint\.pt: cannot be read") as info:
+        load_checkpoint(tmp_path)
+    assert "EOFError" in str(info.value) and "move the run directory away" in str(info.value)
 
 
 def test_a_run_directory_of_another_config_is_refused(tmp_path: Path) -> None:
@@ -97,16 +123,24 @@ def test_a_live_writer_locks_its_run_directory(tmp_path: Path) -> None:
     assert run(compose_cfg([*ARGS, "budget.max_steps=50"]), tmp_path).env_steps == 50  # a dead owner's lock is stale
 
 
-def test_sigterm_checkpoints_and_the_same_command_resumes(tmp_path: Path) -> None:
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT])
+def test_a_signal_checkpoints_says_so_in_one_line_and_the_same_command_resumes(tmp_path: Path, signum: int) -> None:
     out = tmp_path / "run"
     env = {**os.environ, "PYTHONPATH": str(REPO)}
     cmd = [sys.executable, "-m", "runners.train", *ARGS, "progress=false", f"hydra.run.dir={out}"]
-    proc = subprocess.Popen(cmd, cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    proc = subprocess.Popen(cmd, cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     while proc.poll() is None and _rows(out / "metrics.csv") < 5:
         time.sleep(0.02)
-    proc.send_signal(signal.SIGTERM)
-    output, _ = proc.communicate(timeout=120)
-    assert proc.returncode != 0 and "run the same command again to resume" in output
+    proc.send_signal(signum)
+    stdout, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 128 + signum, stderr[-2000:]
+    assert "Traceback" not in stdout + stderr
+    step = _rows(out / "metrics.csv")  # the run stops at the step after the signal, not necessarily on a row
+    assert re.fullmatch(r"interrupted at step (\d+), checkpoint written; run the same command again to resume",
+                        stderr.strip().splitlines()[-1]), stderr[-2000:]  # fmt: skip
+    assert int(stderr.strip().splitlines()[-1].split()[3].rstrip(",")) >= 10 * step
+    log = (out / "train.log").read_text()
+    assert "running in" in log and f"signal {int(signum)} at env step" in log  # the run's log lines
     res = run_cli([*ARGS, f"hydra.run.dir={out}"], cwd=tmp_path)
     assert res.returncode == 0 and "resuming" in res.stdout + res.stderr
     assert int(metrics_without_wall_clock(out)[-1][0]) == 120

@@ -3,9 +3,11 @@
 from curiosity.config.build import build, choice
 from curiosity.config.resolvers import register_resolvers
 from curiosity.config.schema import register_schemas
-from curiosity.config.validate import ConfigError, validate
+from curiosity.config.validate import ConfigError, sampled_candidates, validate
 
-__all__ = ["ConfigError", "build", "choice", "register_resolvers", "register_schemas", "setup", "validate"]
+__all__ = [
+    "ConfigError", "build", "choice", "register_resolvers", "register_schemas", "sampled_candidates", "setup", "validate",
+]
 
 
 def setup() -> None:

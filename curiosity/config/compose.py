@@ -1,20 +1,85 @@
-"""Compose the run config in Python, as ``python -m runners.train`` would (for notebooks, tests, benchmarks)."""
+"""Compose the run config in Python, as ``python -m runners.train`` would (for notebooks, tests, benchmarks, and the
+command line's checks before Hydra starts a job), and say in one line why a command line does not compose."""
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from pathlib import Path
 
 from hydra import compose, initialize_config_dir
+from hydra.core.override_parser.overrides_parser import OverridesParser
+from hydra.errors import HydraException, MissingConfigException, OverrideParseException
 from omegaconf import DictConfig
+from omegaconf.errors import ConfigAttributeError, ConfigKeyError, OmegaConfBaseException
 
 from curiosity.config import setup
 
 CONF_DIR = Path(__file__).resolve().parents[2] / "conf"
+JOB_NAME = "train"  # as ``python -m runners.train`` names its job (and its log file, train.log)
 
 
-def compose_config(overrides: Sequence[str] = ()) -> DictConfig:
-    """The run config for command-line style ``overrides`` (``["estimator=knn", "seed=3"]``), without Hydra's node."""
+def compose_config(overrides: Sequence[str] = (), hydra_node: bool = False) -> DictConfig:
+    """The run config for command-line style ``overrides`` (``["estimator=knn", "seed=3"]``).
+
+    With ``hydra_node`` it keeps Hydra's own node (``hydra.run.dir``, ``hydra.runtime.choices``, ...) as the command
+    line would see it.
+    """
     setup()
-    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
-        return compose(config_name="config", overrides=list(overrides))
+    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3", job_name=JOB_NAME):
+        return compose(config_name="config", overrides=list(overrides), return_hydra_config=hydra_node)
+
+
+def _override_of(key: str, overrides: Sequence[str]) -> str:
+    """The override that sets ``key`` (``key=value``), or ``key`` itself."""
+    for override in overrides:
+        if re.sub(r"^[+~]+", "", override).split("=")[0].split("@")[0] == key:
+            return override
+    return key
+
+
+def _missing_option(err: MissingConfigException) -> str | None:
+    """``estimator=kdee: no option kdee in group estimator; allowed: kde, knn`` from Hydra's missing-option error."""
+    found = re.search(r"Could not find '([^']+)/([^'/]+)'", str(err))
+    if not found:
+        return None
+    group, option = found.groups()
+    options = re.search(r"Available options in '[^']+':\n((?:\t.*\n?)*)", str(err))
+    allowed = ", ".join(line.strip() for line in options[1].splitlines() if line.strip()) if options else "see --help"
+    return f"{group}={option}: no option {option} in group {group}; allowed: {allowed}"
+
+
+def _unparsable(overrides: Sequence[str]) -> str | None:
+    """``seed=[: cannot be parsed (...)`` for the first override Hydra's grammar rejects."""
+    parser = OverridesParser.create()
+    for override in overrides:
+        try:
+            parser.parse_overrides([override])
+        except OverrideParseException as err:
+            why = str(err).splitlines()[0]
+            return f"{override}: cannot be parsed ({why}); allowed: key=value, group=option, +key=value, ~key"
+    return None
+
+
+def describe_compose_error(err: Exception, overrides: Sequence[str]) -> str:
+    """One line naming the override, its value and what is allowed, for an error Hydra raised while composing."""
+    if isinstance(err, MissingConfigException) and (line := _missing_option(err)):
+        return line
+    if isinstance(err, OverrideParseException) and (line := _unparsable(overrides)):
+        return line
+    if found := re.match(r"Ambiguous value for argument '(([^=']+)=[^']*)'", str(err)):
+        arg, key = found.groups()
+        return (f"{arg}: a comma-separated value is a sweep and needs -m; allowed: -m {arg} (one job per value), "
+                f"{key}=[...] (a list) or {key}='...' (a string)")  # fmt: skip
+    cause = err.__cause__
+    if isinstance(cause, OmegaConfBaseException) and getattr(cause, "full_key", None):
+        key = str(cause.full_key)
+        if isinstance(cause, (ConfigAttributeError, ConfigKeyError)):
+            return (f"{_override_of(key, overrides)}: {key} is not a key of this configuration; allowed: the keys "
+                    "`python -m runners.train --help` lists")  # fmt: skip
+        return f"{_override_of(key, overrides)}: {str(cause.msg).splitlines()[0]}"
+    text = str(err).split("\nConfig search path")[0].split("\nSee https")[0]
+    return "; ".join(line.strip() for line in text.splitlines() if line.strip())
+
+
+COMPOSE_ERRORS: tuple[type[Exception], ...] = (HydraException, OmegaConfBaseException)

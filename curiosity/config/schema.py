@@ -79,6 +79,7 @@ class EnvConfig:
     frame_stack: int = 4
     state_dim: int = MISSING  # length of the env's own observation vector (env.obs=state)
     n_actions: int = 3
+    pixels_available: bool = True  # whether env.obs=pixels is possible (a renderer exists)
     coverage_low: list[float] = MISSING
     coverage_high: list[float] = MISSING
     coverage_bins: list[int] = MISSING
@@ -185,6 +186,7 @@ class MPCConfig:
     temperature: float = 0.02
     eta: float = 1.0
     max_candidates: int = 243
+    sample_candidates: bool = False  # above max_candidates sequences: sample that many (true) or refuse (false)
     n_actions: int = "${env.n_actions}"  # type: ignore[assignment]
     temperature_scale: TemperatureScale = TemperatureScale.absolute
     model: PlannerModel = PlannerModel.learned

@@ -1,4 +1,4 @@
-"""Range checks for every numeric field, run before any environment is built."""
+"""Range checks for every numeric field, and the pairings between groups, run before any environment is built."""
 
 from __future__ import annotations
 
@@ -8,10 +8,15 @@ from typing import Any
 from omegaconf import DictConfig, OmegaConf
 
 from curiosity.config.build import choice
+from curiosity.errors import RunError
 
 
-class ConfigError(ValueError):
-    """An invalid configuration value; the message names each key, its value and what is allowed."""
+class ConfigError(ValueError, RunError):
+    """An invalid configuration; the one-line message names each key, its value and what is allowed."""
+
+    def __init__(self, errors: list[str]) -> None:
+        self.errors = errors
+        super().__init__("; ".join(errors))
 
 
 _ABSENT = object()
@@ -72,7 +77,22 @@ RULES: list[Rule] = [
     ("transition_ensemble", lambda v: v >= 1, "an integer >= 1 (1: one transition model)"),
     ("memory_refresh_drift", lambda v: v >= 0, "a number >= 0 (0: refresh on the schedule only)"),
     ("probe_every", lambda v: v >= 0, "an integer >= 0 (0: no model probe)"),
+    ("encoder.hidden", lambda v: all(w >= 1 for w in v), "a list of layer widths >= 1"),
+    ("baseline.epsilon", lambda v: 0 <= v <= 1, "an exploration probability in [0, 1]"),
+    ("baseline.gamma", lambda v: 0 <= v <= 1, "a discount in [0, 1]"),
+    ("baseline.intrinsic.lr", lambda v: v > 0, "a learning rate > 0"),
+    ("baseline.intrinsic.eta", lambda v: v >= 0, "a number >= 0"),
+    ("baseline.intrinsic.beta", lambda v: 0 <= v <= 1, "a weight in [0, 1]"),
+    ("baseline.intrinsic.loss_weight", lambda v: v >= 0, "a number >= 0"),
+    ("baseline.intrinsic.feature_dim", lambda v: v >= 1, "an integer >= 1"),
+    ("baseline.intrinsic.out_dim", lambda v: v >= 1, "an integer >= 1"),
+    ("baseline.intrinsic.gamma_int", lambda v: 0 <= v <= 1, "a discount in [0, 1]"),
+    ("baseline.intrinsic.obs_clip", lambda v: v > 0, "a number > 0"),
 ]
+
+# The observations each encoder takes, and the largest tree a tree planner may expand at every env step.
+ENCODER_OBS = {"conv": "pixels", "mlp": "state"}
+MAX_TREE_LEAVES = 3**10
 
 
 def _cross_field_errors(cfg: DictConfig) -> list[str]:
@@ -96,20 +116,92 @@ def _cross_field_errors(cfg: DictConfig) -> list[str]:
     return errors
 
 
-def validate(cfg: DictConfig, rules: list[Rule] | None = None) -> None:
-    """Check every rule whose key is present in ``cfg``.
+def _pairing_errors(cfg: DictConfig) -> list[str]:
+    """The encoder must take the env's observations, and the env must have them."""
+    obs, env = choice(cfg.env.obs), cfg.env.name
+    if obs == "pixels" and not cfg.env.pixels_available:
+        return [f"env.obs=pixels: env={env} has no pixel observations; allowed: env.obs=state (with encoder=mlp)"]
+    encoder = OmegaConf.select(cfg, "encoder.name", default=None)
+    takes = ENCODER_OBS.get(encoder)
+    if takes is None or takes == obs:
+        return []
+    fits = " or ".join(sorted(name for name, kind in ENCODER_OBS.items() if kind == obs))
+    other = f", or env.obs={takes} with encoder={encoder}" if takes == "state" or cfg.env.pixels_available else ""
+    return [f"encoder={encoder}: takes {takes.removesuffix('s')} observations, but env={env} has env.obs={obs}; "
+            f"allowed: encoder={fits} with env.obs={obs}{other}"]  # fmt: skip
 
-    Raises:
-        ConfigError: listing every violated key as ``key=value: must be <allowed>``.
-    """
+
+def _largest_horizon(n_actions: int, limit: int) -> int:
+    """The largest H with n_actions^H <= limit (0 when even H = 1 exceeds it)."""
+    h = 0
+    while n_actions > 1 and n_actions ** (h + 1) <= limit:
+        h += 1
+    return h
+
+
+def _planner_errors(cfg: DictConfig) -> list[str]:
+    """MPC scores every action sequence unless sampling is asked for; a tree planner expands A^H leaves per step."""
+    planner, a = cfg.planner, int(cfg.planner.n_actions)
+    h = int(planner.horizon)
+    total = a**h
+    limit = OmegaConf.select(planner, "max_candidates", default=None)
+    if limit is None:
+        if total <= MAX_TREE_LEAVES:
+            return []
+        return [f"planner.horizon={h}: a depth-{h} tree has {a}^{h} = {total} leaves to evaluate at every env step; "
+                f"allowed: planner.horizon <= {_largest_horizon(a, MAX_TREE_LEAVES)}"]  # fmt: skip
+    if total <= limit or planner.get("sample_candidates", False):
+        return []
+    return [f"planner.horizon={h}: {a}^{h} = {total} candidate sequences exceed planner.max_candidates={limit}; "
+            f"allowed: planner.horizon <= {_largest_horizon(a, limit)} (every sequence scored), a larger "
+            f"planner.max_candidates, or planner.sample_candidates=true (score {limit} sampled sequences)"]  # fmt: skip
+
+
+def sampled_candidates(cfg: DictConfig) -> int | None:
+    """How many action sequences the MPC planner samples per step; None when it scores all of them (or is a tree)."""
+    limit = OmegaConf.select(cfg, "planner.max_candidates", default=None)
+    if limit is None or int(cfg.planner.n_actions) ** int(cfg.planner.horizon) <= limit:
+        return None
+    return int(limit)
+
+
+def _rule_errors(cfg: DictConfig, rules: list[Rule], prefix: str = "") -> list[str]:
     errors = []
-    for key, ok, allowed in RULES if rules is None else rules:
+    for key, ok, allowed in rules:
         value = OmegaConf.select(cfg, key, default=_ABSENT)
         if value is _ABSENT:
             continue
-        if not ok(value):
-            errors.append(f"{key}={value!r}: must be {allowed}")
+        try:
+            good = ok(value)
+        except TypeError:  # a string or a list where a number belongs (keys of untyped nodes)
+            good = False
+        if not good:
+            shown = OmegaConf.to_container(value) if OmegaConf.is_config(value) else value
+            errors.append(f"{prefix}{key}={shown!r}: must be {allowed}")
+    return errors
+
+
+def _settings_errors(cfg: DictConfig) -> list[str]:
+    """Range errors of the nodes a baseline's ``settings`` put in place of the run config's (NSRS)."""
+    settings = OmegaConf.select(cfg, "baseline.settings", default=None)
+    if settings is None:
+        return []
+    merged = OmegaConf.create(OmegaConf.to_container(cfg, resolve=True))
+    keys = list(merged.baseline.settings.keys())
+    for key in keys:
+        merged[key] = merged.baseline.settings[key]  # as NSRSAgent applies them: whole nodes replaced
+    rules = [r for r in RULES if r[0].split(".")[0] in keys]
+    return _rule_errors(merged, rules, prefix="baseline.settings.")
+
+
+def validate(cfg: DictConfig, rules: list[Rule] | None = None) -> None:
+    """Check every rule whose key is present in ``cfg``, then the keys that depend on each other.
+
+    Raises:
+        ConfigError: listing every violated key as ``key=value: must be <allowed>`` (or ``...; allowed: ...``).
+    """
+    errors = _rule_errors(cfg, RULES if rules is None else rules) + _settings_errors(cfg)
     if not errors:
-        errors = _cross_field_errors(cfg)
+        errors = _cross_field_errors(cfg) + _pairing_errors(cfg) + _planner_errors(cfg)
     if errors:
-        raise ConfigError("invalid configuration:\n  " + "\n  ".join(errors))
+        raise ConfigError(errors)

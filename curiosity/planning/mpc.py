@@ -20,7 +20,8 @@ class MPCPlanner:
 
     ŝ_0 = z0 and ŝ_{i+1} = T(ŝ_i, a_i): the reward term is scored on the (latent, action) pair before stepping, the
     intrinsic term on the edge (ŝ_i, a_i, ŝ_{i+1}) (state novelty scores the state reached). Candidates are all A^H
-    sequences when A^H ≤ ``max_candidates``, else ``max_candidates`` sequences drawn uniformly (with replacement).
+    sequences when A^H ≤ ``max_candidates``, else ``max_candidates`` sequences drawn uniformly (with replacement),
+    which must be asked for with ``sample_candidates=True``.
 
     Rollouts run in one batched call per depth. Candidates sharing a prefix share its rollout: at depth i only the
     distinct (prefix, a_i) pairs are scored and stepped (A + A² + … + A^H pairs for the full enumeration, 363 for
@@ -35,6 +36,7 @@ class MPCPlanner:
         eta: intrinsic weight η.
         max_candidates: enumeration limit / number of sampled sequences.
         n_actions: A.
+        sample_candidates: whether to sample ``max_candidates`` sequences when A^H exceeds it (else ValueError).
         model: where imagined futures come from: ``learned`` (the world model) or ``oracle`` (the real simulator,
             rendered and encoded: the upper bound a learned model is measured against). The agent builds the rollout.
     """
@@ -49,11 +51,16 @@ class MPCPlanner:
         eta: float = 1.0,
         max_candidates: int = 243,
         n_actions: int = 3,
+        sample_candidates: bool = False,
         temperature_scale: str = "absolute",
         model: str = "learned",
     ) -> None:
         if horizon < 1 or n_actions < 1 or max_candidates < 1:
             raise ValueError("horizon, n_actions and max_candidates must be >= 1")
+        if n_actions**horizon > max_candidates and not sample_candidates:
+            raise ValueError(f"horizon={horizon}: {n_actions}^{horizon} sequences exceed max_candidates={max_candidates}; "
+                             "pass sample_candidates=True to sample max_candidates of them")  # fmt: skip
+        self.sample_candidates = sample_candidates
         self.horizon = horizon
         self.gamma = gamma
         self.temperature = temperature

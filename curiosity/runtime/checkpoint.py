@@ -1,47 +1,103 @@
-"""Checkpoints of a whole run, written atomically, and the guard that keeps two writers out of one run directory."""
+"""Checkpoints of a whole run, written atomically, and the guard that keeps two writers out of one run directory.
+
+Writing a checkpoint keeps the one it replaces as ``checkpoint.prev.pt``; when ``checkpoint.pt`` cannot be read
+(truncated, empty, not a checkpoint), the run resumes from the previous one and says so in its log.
+"""
 
 from __future__ import annotations
 
+import logging
 import os
 import random
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-import torch
+from curiosity.errors import CheckpointError, RunDirectoryError
 
-from curiosity.errors import RunDirectoryError
+log = logging.getLogger(__name__)
 
 CHECKPOINT = "checkpoint.pt"
+PREVIOUS = "checkpoint.prev.pt"
 LOCK = "run.lock"
+_KEYS = ("config", "step", "finished")  # what every checkpoint of a run holds
+
+
+# numpy and torch are imported where they are used: the command line checks run directories (lock_holder,
+# locked_error) before it imports them.
 
 
 def rng_states() -> dict[str, Any]:
     """The global generators: python, numpy, torch."""
+    import numpy as np
+    import torch
+
     return {"python": random.getstate(), "numpy": np.random.get_state(), "torch": torch.get_rng_state()}
 
 
 def set_rng_states(state: dict[str, Any]) -> None:
+    import numpy as np
+    import torch
+
     random.setstate(state["python"])
     np.random.set_state(state["numpy"])
     torch.set_rng_state(state["torch"])
 
 
 def save_checkpoint(run_dir: str | Path, state: dict[str, Any]) -> Path:
-    """Write ``state`` to ``run_dir/checkpoint.pt`` through a temporary file and an atomic rename."""
+    """Write ``state`` to ``run_dir/checkpoint.pt`` through a temporary file and an atomic rename.
+
+    The checkpoint it replaces becomes ``checkpoint.prev.pt`` (renamed, not copied); :func:`load_checkpoint` falls
+    back to it, also in the instant between the two renames.
+    """
+    import torch
+
     path = Path(run_dir) / CHECKPOINT
     tmp = path.with_name(f".{CHECKPOINT}.{os.getpid()}.tmp")
     torch.save(state, tmp)
     with open(tmp, "rb") as f:
         os.fsync(f.fileno())
+    if path.exists():
+        os.replace(path, path.with_name(PREVIOUS))
     os.replace(tmp, path)
     return path
 
 
+def _read(path: Path) -> tuple[dict[str, Any] | None, str]:
+    """(the checkpoint, "") or (None, why it cannot be read)."""
+    import torch
+
+    try:
+        state = torch.load(path, weights_only=False)
+    except Exception as err:  # unpickling a damaged file can fail in many ways; all mean "unreadable"
+        return None, " ".join(f"{type(err).__name__}: {err}".split())[:120]
+    if not isinstance(state, dict) or not all(k in state for k in _KEYS):
+        return None, "not a checkpoint of a run"
+    return state, ""
+
+
 def load_checkpoint(run_dir: str | Path) -> dict[str, Any] | None:
-    """The run's last checkpoint, or None."""
+    """The run's last readable checkpoint (``checkpoint.pt``, else ``checkpoint.prev.pt``), or None if it has none.
+
+    Raises:
+        CheckpointError: naming the file, when checkpoints exist but none can be read.
+    """
     path = Path(run_dir) / CHECKPOINT
-    return torch.load(path, weights_only=False) if path.exists() else None
+    problems = []
+    for candidate in (path, path.with_name(PREVIOUS)):
+        if not candidate.exists():
+            continue
+        state, problem = _read(candidate)
+        if state is None:
+            problems.append(f"{candidate.name}: {problem}")
+            continue
+        if candidate != path:
+            why = problems[0] if problems else f"{CHECKPOINT}: missing"
+            log.warning("%s cannot be read (%s); resuming from %s at env step %d", path, why, candidate.name, state["step"])
+        return state
+    if not problems:
+        return None
+    raise CheckpointError(f"{path}: cannot be read ({'; '.join(problems)}); allowed: move the run directory away (or "
+                          "delete it) to start the run again from step 0, or another run directory")  # fmt: skip
 
 
 def _alive(pid: int) -> bool:
@@ -52,6 +108,21 @@ def _alive(pid: int) -> bool:
     except PermissionError:
         return True
     return True
+
+
+def lock_holder(run_dir: str | Path) -> int | None:
+    """The id of another live process that holds ``run_dir``'s lock, or None (no lock, or a stale one)."""
+    try:
+        pid = int((Path(run_dir) / LOCK).read_text().strip() or 0)
+    except (OSError, ValueError):
+        return None
+    return pid if pid and pid != os.getpid() and _alive(pid) else None
+
+
+def locked_error(run_dir: str | Path, pid: int) -> RunDirectoryError:
+    """The refusal of a run directory that process ``pid`` is writing."""
+    return RunDirectoryError(f"{run_dir} is being written by process {pid} (its {LOCK}); two jobs never share a run "
+                             "directory; allowed: wait for it, or other overrides or another hydra.run.dir")  # fmt: skip
 
 
 class RunLock:
@@ -66,14 +137,9 @@ class RunLock:
             try:
                 fd = os.open(self.path, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
             except FileExistsError:
-                try:
-                    pid = int(self.path.read_text().strip() or 0)
-                except (OSError, ValueError):
-                    pid = 0
-                if pid and pid != os.getpid() and _alive(pid):
-                    msg = (f"{self.path.parent} is being written by process {pid}; two jobs never share a run "
-                           "directory (give this run other overrides or another hydra.run.dir)")  # fmt: skip
-                    raise RunDirectoryError(msg) from None
+                pid = lock_holder(self.path.parent)
+                if pid is not None:
+                    raise locked_error(self.path.parent, pid) from None
                 self.path.unlink(missing_ok=True)
                 continue
             with os.fdopen(fd, "w") as f:

@@ -6,6 +6,7 @@ import json
 import logging
 import signal
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -15,7 +16,7 @@ from omegaconf import DictConfig, OmegaConf
 from tqdm import tqdm
 
 from curiosity.agents.base import Agent
-from curiosity.config import ConfigError, build, validate
+from curiosity.config import ConfigError, build, sampled_candidates, validate
 from curiosity.envs import GridCoverage, make_env, physical_state
 from curiosity.envs.directed import directed_action_fn
 from curiosity.envs.state import env_state, restore_env
@@ -36,7 +37,12 @@ VOLATILE_KEYS = ("progress", "threads", "resume", "checkpoint_every")
 class Interrupted(KeyboardInterrupt):
     """The run was stopped by SIGTERM/SIGINT after writing a checkpoint; re-run the same command to resume it.
 
-    A ``KeyboardInterrupt``, so a local sweep stops too instead of going on with its next job."""
+    A ``KeyboardInterrupt``, so a local sweep stops too instead of going on with its next job. Its message is the one
+    line the command prints; ``signum`` gives the exit status (128 + signum)."""
+
+    def __init__(self, signum: int, step: int) -> None:
+        self.signum, self.step = signum, step
+        super().__init__(f"interrupted at step {step}, checkpoint written; run the same command again to resume")
 
 
 def check_built(cfg: DictConfig) -> None:
@@ -66,39 +72,43 @@ def _differences(saved: dict[str, Any], now: dict[str, Any], prefix: str = "") -
     return out
 
 
-def _existing_checkpoint(cfg: DictConfig, run_dir: Path) -> dict[str, Any] | None:
+def existing_checkpoint(cfg: DictConfig, run_dir: Path) -> dict[str, Any] | None:
     """The checkpoint to resume from, None for a fresh directory; refuses anything else."""
     ckpt = load_checkpoint(run_dir)
     if ckpt is None:
         if (run_dir / "metrics.csv").exists():
-            raise RunDirectoryError(f"{run_dir} already holds a run without a checkpoint; it is not overwritten "
-                                    "(use another run directory)")  # fmt: skip
+            raise RunDirectoryError(f"{run_dir} already holds a run without a checkpoint; it is not overwritten; "
+                                    "allowed: another run directory (hydra.run.dir)")  # fmt: skip
         return None
     if not cfg.resume:
-        raise RunDirectoryError(f"{run_dir} holds a checkpoint at step {ckpt['step']}; resume=false refuses to "
-                                "overwrite it (use another run directory, or resume=true)")  # fmt: skip
+        raise RunDirectoryError(f"resume=false: {run_dir} holds a checkpoint at step {ckpt['step']}, not overwritten; "
+                                "allowed: resume=true (resumes or completes that run), or another run directory")  # fmt: skip
     diff = _differences(ckpt["config"], identity(cfg))
     if diff:
-        raise RunDirectoryError(f"{run_dir} holds a run of another configuration; not resuming it: " + "; ".join(diff[:5]))
+        raise RunDirectoryError(f"{run_dir} holds a run of another configuration ({', '.join(diff[:5])}); not resuming "
+                                "it; allowed: that run's configuration (resumes it), or another run directory")  # fmt: skip
     return ckpt
 
 
-def run(cfg: DictConfig, run_dir: str | Path) -> RunSummary:
+def run(cfg: DictConfig, run_dir: str | Path, on_start: Callable[[], None] | None = None) -> RunSummary:
     """Run one experiment into ``run_dir`` (resuming it from its checkpoint if there is one) and return its summary.
 
     Validates the config before anything is built. The first ``budget.warmup_steps`` actions are uniformly random;
     every step counts towards steps-to-goal. A checkpoint is written every ``checkpoint_every`` env steps, at the end,
-    and on SIGTERM/SIGINT; re-running the same command resumes from it.
+    and on SIGTERM/SIGINT; re-running the same command resumes from it. ``on_start`` is called once the directory is
+    locked and checked, before a run starts or resumes (not for a complete run): nothing is written before.
     """
     validate(cfg)
     check_built(cfg)
     run_dir = Path(run_dir)
     with RunLock(run_dir):
-        ckpt = _existing_checkpoint(cfg, run_dir)
+        ckpt = existing_checkpoint(cfg, run_dir)
         if ckpt is not None and ckpt["finished"]:
             summary = RunSummary(**json.loads((run_dir / "summary.json").read_text()))
             log.info("%s seed=%d: already complete in %s", summary.method, summary.seed, run_dir)
             return summary
+        if on_start is not None:
+            on_start()
         summary = _Run(cfg, run_dir, ckpt).execute()
     goal = f"goal at step {summary.steps_to_goal}" if summary.reached_goal else "goal not reached"
     log.info(
@@ -205,8 +215,7 @@ class _Run:
                     self.save(finished=False)
                 if self.stop_signal is not None and not done:
                     self.save(finished=False)
-                    raise Interrupted(f"signal {self.stop_signal} at env step {self.step}: checkpoint written to "
-                                      f"{self.run_dir}; run the same command again to resume")  # fmt: skip
+                    raise Interrupted(self.stop_signal, self.step)
         finally:
             bar.close()
 
@@ -240,5 +249,6 @@ class _Run:
             reached_goal=self.steps_to_goal is not None, env_steps=self.step, max_steps=budget.max_steps,
             warmup_steps=budget.warmup_steps, final_coverage=self.coverage.fraction, wall_seconds=wall,
             steps_per_second=self.step / max(wall, 1e-9), git_commit=commit, git_dirty=dirty,
+            planner_sampled_candidates=sampled_candidates(self.cfg),
             behaviour=self.behaviour.summary(), agent=self.agent.summary(),
         )  # fmt: skip

@@ -29,7 +29,9 @@ class RunSummary:
     """The fields of ``summary.json``.
 
     ``steps_to_goal`` counts every env step, random warm-up included, up to and including the step that reached the
-    goal; it is ``None`` when the goal was not reached within ``max_steps`` (a censored run). ``behaviour`` and
+    goal; it is ``None`` when the goal was not reached within ``max_steps`` (a censored run).
+    ``planner_sampled_candidates`` is the number of action sequences the MPC planner sampled per step when it could
+    not score all of them (``planner.sample_candidates=true``); ``None`` when it scored every one. ``behaviour`` and
     ``agent`` are absent from runs made before they existed.
     """
 
@@ -46,6 +48,7 @@ class RunSummary:
     steps_per_second: float
     git_commit: str
     git_dirty: bool
+    planner_sampled_candidates: int | None = None
     behaviour: dict[str, Any] | None = None  # BehaviourTracker.summary(): action frequencies, repeat and directed rates
     agent: dict[str, Any] = field(default_factory=dict)  # the agent's own run totals (Agent.summary())
 

@@ -1,0 +1,80 @@
+"""The analysis commands on run directories finished or not: a useful result or one clear line, never a traceback."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from tests.conftest import REPO
+
+TUNING = REPO / "results" / "tuning"  # three finished seeds and one stopped at env step 1990 (no summary.json)
+
+
+def analysis(module: str, *args: str | Path) -> subprocess.CompletedProcess:
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    res = subprocess.run([sys.executable, "-m", f"analysis.{module}", *map(str, args)], cwd=REPO, env=env,
+                         capture_output=True, text=True, timeout=120)  # fmt: skip
+    assert "Traceback" not in res.stdout + res.stderr, res.stderr
+    return res
+
+
+@pytest.fixture
+def sweep(tmp_path: Path) -> Path:
+    """A copy of results/tuning, plus a job refused before it ran (FAILED.json only)."""
+    root = tmp_path / "sweep"
+    shutil.copytree(TUNING, root)
+    refused = root / "acrobot" / "random" / "+foo=1" / "seed=0"
+    refused.mkdir(parents=True)
+    (refused / "FAILED.json").write_text(json.dumps({"error": "ConfigError: +foo=1: foo is not a key", "overrides": []}))
+    started = root / "acrobot" / "random" / "default" / "seed=0" / ".hydra"  # stopped before its first metrics row
+    started.mkdir(parents=True)
+    shutil.copy(next(root.rglob("seed=0/.hydra/config.yaml")), started / "config.yaml")
+    return root
+
+
+def test_collect_lists_every_run_with_its_status(sweep: Path) -> None:
+    res = analysis("collect", sweep)
+    assert res.returncode == 0, res.stderr
+    lines = res.stdout.splitlines()
+    assert len(lines) == 7 and lines[-1] == "6 run(s): 3 complete, 1 failed, 2 stopped"
+    assert any("default/seed=0  before its first metrics row" in line for line in lines)
+    assert any(line.startswith("stopped") and "seed=3  at env step 1990" in line for line in lines)
+    assert any(line.startswith("failed") and "+foo=1" in line for line in lines)
+
+
+@pytest.mark.parametrize("module", ["collect", "steps_table", "profile"])
+def test_no_runs_or_no_directory_is_one_line_and_non_zero(tmp_path: Path, module: str) -> None:
+    for root in (tmp_path, tmp_path / "missing"):
+        res = analysis(module, root)
+        assert res.returncode != 0 and res.stderr.startswith("error: ") and len(res.stderr.splitlines()) == 1
+
+
+def test_steps_table_lists_the_runs_not_finished(sweep: Path) -> None:
+    res = analysis("steps_table", sweep, "--markdown")
+    assert res.returncode == 0, res.stderr
+    assert "| 3 / 3 (1 more not finished) | 365, 1855, 1452 | 1224.0 ± 445.0 |" in res.stdout
+    assert "stopped: " in res.stdout and "seed=3  at env step 1990" in res.stdout
+    assert "failed: " in res.stdout and "+foo=1" in res.stdout
+
+
+def test_profile_of_a_sweep_root_profiles_each_run_finished_or_not(sweep: Path) -> None:
+    res = analysis("profile", sweep)
+    assert res.returncode == 0, res.stderr
+    assert res.stdout.count("  total ") == 4 and "(unfinished: up to env step 1990)" in res.stdout  # 4 with metrics
+
+
+def test_the_readme_results_command_prints_the_readme_table() -> None:
+    readme = (REPO / "README.md").read_text()
+    command = re.search(r"`python -m (analysis\.steps_table [^`]*--markdown)`", readme)
+    assert command, "the README's Results section names its table's command"
+    module, *args = command[1].removeprefix("analysis.").split()
+    res = analysis(module, *args)
+    assert res.returncode == 0, res.stderr
+    assert res.stdout.strip() in readme
