@@ -157,3 +157,13 @@ def test_mpc_samples_only_when_asked_and_says_how_many() -> None:
     validate(cfg)
     assert sampled_candidates(cfg) == 243
     assert sampled_candidates(compose_cfg(["planner=qtree"])) is None
+
+
+def test_a_long_override_list_gets_a_short_unique_directory_name() -> None:
+    from curiosity.config.resolvers import MAX_VARIANT_BYTES, run_variant
+
+    assert run_variant("") == "default" and run_variant("seed=3") == "seed=3"
+    long_a = ",".join(f"key{i}=value{i}" for i in range(40))
+    long_b = long_a.replace("value39", "value40")
+    a, b = run_variant(long_a), run_variant(long_b)
+    assert len(a.encode()) <= MAX_VARIANT_BYTES and a != b and a.startswith(long_a[:100])

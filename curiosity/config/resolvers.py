@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import hashlib
+
 from hydra.core.global_hydra import GlobalHydra
 from omegaconf import OmegaConf
 
@@ -9,9 +11,20 @@ from omegaconf import OmegaConf
 HELP_GROUPS = ("hydra/launcher",)
 
 
+MAX_VARIANT_BYTES = 200  # a directory name may have 255 bytes on common filesystems
+
+
 def run_variant(override_dirname: str) -> str:
-    """The run-directory component naming a run's command-line overrides (``default`` when there are none)."""
-    return override_dirname or "default"
+    """The run-directory component naming a run's command-line overrides (``default`` when there are none).
+
+    A name longer than ``MAX_VARIANT_BYTES`` (many overrides) is cut and made unique by a hash of the whole:
+    ``<first 180 bytes>~<12 hex digits>``; the run's ``.hydra/overrides.yaml`` keeps the overrides in full.
+    """
+    name = override_dirname or "default"
+    if len(name.encode()) <= MAX_VARIANT_BYTES:
+        return name
+    digest = hashlib.sha1(name.encode()).hexdigest()[:12]
+    return name.encode()[:180].decode(errors="ignore") + "~" + digest
 
 
 def _listed(group: str) -> bool:
