@@ -194,12 +194,17 @@ def test_ensemble_members_disagree_and_each_trains_on_its_own_loss() -> None:
 
 
 # ----------------------------------------------------------------------------- the probe command
+def finished_run(cfg, run_dir: Path) -> None:
+    """A finished run directory as the CLI leaves it: the run, then its .hydra/config.yaml (which the job writes)."""
+    run(cfg, run_dir)
+    (run_dir / ".hydra").mkdir()
+    (run_dir / ".hydra" / "config.yaml").write_text(OmegaConf.to_yaml(cfg))
+
+
 def test_probe_command_on_a_run_directory_and_a_refusal(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     from analysis.probe import main
 
-    run(compose_cfg([*FAST, "probe_every=0"]), tmp_path / "run")
-    (tmp_path / "run" / ".hydra").mkdir()
-    (tmp_path / "run" / ".hydra" / "config.yaml").write_text(OmegaConf.to_yaml(compose_cfg([*FAST, "probe_every=0"])))
+    finished_run(compose_cfg([*FAST, "probe_every=0"]), tmp_path / "run")
     assert main([str(tmp_path / "run"), "--states", "2", "--every", "2", "--json", str(tmp_path / "p.json")]) == 0
     out = capsys.readouterr().out
     assert "| 3 |" in out and "Spearman" in out
@@ -216,3 +221,47 @@ def test_pe_estimate_signal_is_measured_on_real_transitions(tmp_path: Path) -> N
                                "transition_dropout=0", "log_every=10"]), tmp_path)  # fmt: skip
     corr = summary.agent["means"]["intrinsic/pe_estimate_corr"]
     assert -1.0 <= corr <= 1.0
+
+
+# ----------------------------------------------------------------------------- energy and the novelty landscape
+def test_energy_is_conserved_without_torque_and_known_at_rest() -> None:
+    import gymnasium as gym
+
+    from curiosity.envs.energy import acrobot as acrobot_energy
+    from curiosity.envs.energy import energy_fn, mountaincar as mountaincar_energy
+
+    assert acrobot_energy(np.zeros(4)) == pytest.approx(-19.6)  # both links hanging: −(0.5 + 1 + 0.5)·9.8
+    env = gym.make("Acrobot-v1").unwrapped
+    env.reset(seed=0)
+    env.state = np.array([0.5, -0.3, 1.0, -2.0])
+    energies = [acrobot_energy(env.state)]
+    for _ in range(20):
+        env.step(1)  # zero torque
+        energies.append(acrobot_energy(env.state))
+    assert np.ptp(energies) < 0.05  # rk4 at dt = 0.2 (measured 0.017 J of ~16)
+    env.step(2)
+    assert abs(acrobot_energy(env.state) - energies[-1]) > 0.05  # torque changes it
+    car = gym.make("MountainCar-v0").unwrapped
+    car.reset(seed=0)
+    car.state = np.array([-0.5, 0.0])
+    start = mountaincar_energy(car.state)
+    for _ in range(100):
+        car.step(1)  # no push
+    assert mountaincar_energy(car.state) == pytest.approx(start, abs=1e-6)
+    assert energy_fn("curiosity/Chain-v0") is None
+
+
+def test_landscape_command_reports_every_variant_and_refuses_the_chain(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from analysis.landscape import main
+
+    finished_run(compose_cfg([*FAST, "probe_every=0", "planner.horizon=3"]), tmp_path / "run")
+    assert main([str(tmp_path / "run"), "--states", "2", "--bandwidths", "2", "0.5"]) == 0
+    out = capsys.readouterr().out
+    assert "kde h=2×median NN" in out and "kde h=0.5×median NN" in out and "knn k=5" in out
+    chain = compose_cfg(["env=chain", "encoder=mlp", "progress=false", "budget=smoke", "budget.max_steps=50",
+                         "budget.warmup_steps=20"])  # fmt: skip
+    finished_run(chain, tmp_path / "chain")
+    assert main([str(tmp_path / "chain")]) == 2
+    assert "Acrobot or MountainCar" in capsys.readouterr().err

@@ -1,0 +1,130 @@
+"""Does the novelty the planner maximises point towards progress? ``python -m analysis.landscape RUN_DIR``.
+
+Restores a run at its checkpoint and, at ``--states`` states along the agent's own policy (acting without learning),
+branches the real simulator over every action sequence of the planner's horizon, encodes the true futures, and scores
+each sequence's discounted novelty return under the run's estimator refitted to its memory re-embedded now, and under
+variants (KDE with other bandwidth multipliers, kNN). Neither Acrobot nor MountainCar can be solved without pumping
+mechanical energy in (:mod:`curiosity.envs.energy`), so for each variant it prints the mean Spearman correlation
+between the novelty return and the energy the sequence ends with, how often that correlation is positive, and how
+often the novelty-best first action is the energy-best one (1/3 by chance with three actions).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import torch
+from scipy.stats import spearmanr
+from torch import Tensor
+
+from curiosity.envs.energy import energy_fn
+from curiosity.envs.simulator import Simulator
+from curiosity.novelty.estimators import KDENovelty, KNNNovelty
+from curiosity.planning.probe import tree_latents
+from curiosity.planning.rollout import SimulatorRollout
+from curiosity.runtime.restore import RestoreError, restore_run
+
+
+class ReplayRollout:
+    """Precomputed tree latents (one (A^k, d) tensor per depth, lexicographic), replayed for a full enumeration."""
+
+    def __init__(self, z0: Tensor, levels: list[Tensor]) -> None:
+        self.z, self.levels, self.depth = z0.unsqueeze(0), levels, 0
+
+    def latents(self) -> Tensor:
+        return self.z
+
+    def expand(self, parents: Tensor, actions: Tensor) -> Tensor:
+        self.z = self.levels[self.depth]
+        assert len(parents) == len(self.z), "ReplayRollout replays the full enumeration only"
+        self.depth += 1
+        return self.z
+
+
+def _variants(agent, bandwidths: list[float], k: int) -> dict[str, Callable[[Tensor], Tensor]]:
+    """Novelty functions of standardised latents: KDE per bandwidth multiplier, and kNN, fitted to the memory."""
+    cur = agent.curiosity
+    keys = cur.memory.keys().numpy()
+    z = cur._encode_stored(keys)
+    mean, std = z.mean(0), z.std(0, correction=0).clamp_min(1e-8)
+    memory = (z - mean) / std
+    reference = memory[: min(len(memory), cur.warmup_steps)]
+    out = {}
+    for h in bandwidths:
+        kde = KDENovelty(bandwidth=h)
+        kde.fit(memory, reference)
+        out[f"kde h={h:g}×median NN"] = lambda zq, f=kde: f((zq - mean) / std)
+    knn = KNNNovelty(k=k)
+    knn.fit(memory, reference)
+    out[f"knn k={k}"] = lambda zq: knn((zq - mean) / std)
+    return out
+
+
+def landscape(run_dir: str | Path, states: int = 20, bandwidths: tuple[float, ...] = (2.0, 0.5),
+              k: int = 5) -> dict[str, dict[str, float]]:  # fmt: skip
+    """Per variant: ``rho`` (mean Spearman of novelty return and final energy), ``positive`` (fraction of states
+    with rho > 0), ``first_action`` (fraction where the novelty-best first action is the energy-best one)."""
+    run = restore_run(run_dir)
+    energy = energy_fn(str(run.cfg.env.id))
+    agent, env, obs, step = run.agent, run.env, run.obs, run.step
+    if energy is None or not hasattr(agent, "planner") or agent.q is not None:
+        raise RestoreError(f"{run_dir}: the landscape needs the paper's agent with planner=mpc on Acrobot or MountainCar")
+    torch.set_num_threads(1)
+    agent.env, agent.simulator = env, Simulator(run.cfg.env)
+    planner, model = agent.planner, agent.model
+    seqs, first = planner.candidates(), planner.candidates()[:, 0].numpy()
+    with model.evaluating():
+        variants = _variants(agent, list(bandwidths), k)
+    rho: dict[str, list[float]] = {name: [] for name in variants}
+    hit: dict[str, list[float]] = {name: [] for name in variants}
+    for _ in range(states):
+        with model.evaluating():
+            z0 = model.encode(torch.as_tensor(obs).unsqueeze(0))[0]
+            true = SimulatorRollout(agent.simulator, agent.simulator.root(env, obs), z0, model.encode)
+            levels = tree_latents(true, planner.n_actions, planner.horizon)
+            e = energy(true.states.physical)
+            best_first = int(np.argmax([e[first == a].max() for a in range(planner.n_actions)]))
+            for name, novelty in variants.items():
+                g = planner.scores(z0, seqs, model.next, None, lambda z, a, zn, f=novelty: f(zn),
+                                   rollout=ReplayRollout(z0, levels)).numpy()  # fmt: skip
+                if np.ptp(g) > 0:
+                    rho[name].append(float(spearmanr(g, e).statistic))
+                hit[name].append(float(first[int(np.argmax(g))] == best_first))
+        obs, _, terminated, _, _ = env.step(agent.act(obs, step))
+        step += 1
+        if terminated:
+            break
+    return {name: {"rho": float(np.mean(rho[name])) if rho[name] else float("nan"),
+                   "positive": float(np.mean(np.array(rho[name]) > 0)) if rho[name] else float("nan"),
+                   "first_action": float(np.mean(hit[name])), "states": float(len(hit[name]))}
+            for name in variants}  # fmt: skip
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("run_dir")
+    parser.add_argument("--states", type=int, default=20, help="states along the agent's policy (default 20)")
+    parser.add_argument("--bandwidths", type=float, nargs="+", default=[2.0, 0.5], help="KDE multipliers of the median NN")
+    parser.add_argument("--k", type=int, default=5, help="neighbours of the kNN variant")
+    args = parser.parse_args(argv)
+    if args.states < 1 or args.k < 1 or min(args.bandwidths) <= 0:
+        print("error: --states and --k must be >= 1 and --bandwidths > 0", file=sys.stderr)
+        return 2
+    try:
+        result = landscape(args.run_dir, args.states, tuple(args.bandwidths), args.k)
+    except RestoreError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    print("| novelty | mean Spearman(novelty return, final energy) | states with a positive one | best first action = "
+          "energy-best |\n|---|---|---|---|")  # fmt: skip
+    for name, r in result.items():
+        print(f"| {name} | {r['rho']:.2f} | {r['positive']:.2f} | {r['first_action']:.2f} (of {r['states']:.0f}) |")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
