@@ -13,6 +13,7 @@ import numpy as np
 from omegaconf import DictConfig, OmegaConf
 
 from curiosity.config import build, setup
+from curiosity.config.compose import compose_config
 from curiosity.envs import make_env
 from curiosity.envs.state import restore_env
 from curiosity.runtime.checkpoint import CHECKPOINT, load_checkpoint
@@ -34,6 +35,25 @@ class RestoredRun:
     step: int
 
 
+def _config(run_dir: Path) -> DictConfig:
+    """The run's saved config over the current defaults of its own command line, so that a run made before a key
+    existed gets that key's default (every new key's default keeps the old behaviour)."""
+    setup()
+    saved = OmegaConf.load(run_dir / ".hydra" / "config.yaml")
+    assert isinstance(saved, DictConfig)
+    overrides_file = run_dir / ".hydra" / "overrides.yaml"
+    overrides = [str(o) for o in OmegaConf.load(overrides_file)] if overrides_file.is_file() else []
+    overrides = [o for o in overrides if not o.startswith(("hydra", "seed="))]
+    try:
+        base = compose_config(overrides)
+    except Exception:
+        return saved
+    OmegaConf.set_struct(base, False)
+    merged = OmegaConf.merge(base, saved)
+    assert isinstance(merged, DictConfig)
+    return merged
+
+
 def restore_run(run_dir: str | Path) -> RestoredRun:
     """Load ``run_dir/.hydra/config.yaml`` and ``run_dir/checkpoint.pt`` (read only).
 
@@ -47,9 +67,7 @@ def restore_run(run_dir: str | Path) -> RestoredRun:
     if not (run_dir / CHECKPOINT).is_file():
         raise RestoreError(f"{run_dir}: no {CHECKPOINT} (checkpoints are not committed with results; re-run the run's "
                            "command to make one)")  # fmt: skip
-    setup()
-    cfg = OmegaConf.load(config)
-    assert isinstance(cfg, DictConfig)
+    cfg = _config(run_dir)
     ckpt = load_checkpoint(run_dir)
     assert ckpt is not None
     env = make_env(cfg.env, cfg.budget.max_steps)
