@@ -10,7 +10,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from hydra.errors import HydraException
 from omegaconf import DictConfig, OmegaConf
+from omegaconf.errors import OmegaConfBaseException
 
 from curiosity.config import build, setup
 from curiosity.config.compose import compose_config
@@ -35,21 +37,22 @@ class RestoredRun:
     step: int
 
 
+GROUPS = ("env", "encoder", "entropy", "estimator", "backward", "baseline", "planner", "budget")
+
+
 def _config(run_dir: Path) -> DictConfig:
-    """The run's saved config over the current defaults of its own command line, so that a run made before a key
-    existed gets that key's default (every new key's default keeps the old behaviour)."""
+    """The run's saved config over the current defaults of its group choices, so that a run made before a key existed
+    gets that key's default (every new key's default keeps the old behaviour); the saved config alone if that fails."""
     setup()
     saved = OmegaConf.load(run_dir / ".hydra" / "config.yaml")
     assert isinstance(saved, DictConfig)
-    overrides_file = run_dir / ".hydra" / "overrides.yaml"
-    overrides = [str(o) for o in OmegaConf.load(overrides_file)] if overrides_file.is_file() else []
-    overrides = [o for o in overrides if not o.startswith(("hydra", "seed="))]
+    choices = [f"{g}={saved[g].name}" for g in GROUPS if g in saved and "name" in saved[g]]
     try:
-        base = compose_config(overrides)
-    except Exception:
+        base = compose_config(choices)
+        OmegaConf.set_struct(base, False)
+        merged = OmegaConf.merge(base, saved)
+    except (OmegaConfBaseException, HydraException, ValueError):  # options that no longer exist
         return saved
-    OmegaConf.set_struct(base, False)
-    merged = OmegaConf.merge(base, saved)
     assert isinstance(merged, DictConfig)
     return merged
 
