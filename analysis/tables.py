@@ -10,11 +10,9 @@ a stratified-bootstrap 95 % CI, Welch's t-test p against the reference row, and 
 
 from __future__ import annotations
 
-import argparse
 import fnmatch
 import math
 import os
-import sys
 from collections.abc import Sequence
 from typing import Any
 from pathlib import Path
@@ -22,7 +20,8 @@ from pathlib import Path
 import pandas as pd
 import yaml
 
-from analysis.collect import existing_roots, load_incomplete
+from analysis.cli import Options, parser, run
+from analysis.collect import load_incomplete
 from analysis.rows import label_rows, load_runs, pool_rows
 from analysis.stats import iqm_ci, mean_se, welch_p
 
@@ -149,30 +148,15 @@ def write_tables(root: Path, out: Path, reference: str = DEFAULT_REFERENCE, grou
     return table
 
 
-def parser(description: str) -> argparse.ArgumentParser:
-    """The options every analysis command shares: RUNS_DIR, --out, --group-by, --pool."""
-    p = argparse.ArgumentParser(description=description)
-    p.add_argument("root", help="a directory holding run directories (searched recursively)")
-    p.add_argument("--out", help="where to write (default: RUNS_DIR/report)")
-    p.add_argument("--group-by", default="", help="comma-separated config keys that define a row, e.g. "
-                   "env.name,entropy.name (default: method label + the keys that differ between its runs)")  # fmt: skip
-    p.add_argument("--pool", action="append", default=[], metavar="LABEL=GLOB",
-                   help="merge the rows whose label matches GLOB into one row LABEL (repeatable)")  # fmt: skip
-    return p
-
-
 def main() -> None:
     p = parser(__doc__.splitlines()[0])
     p.add_argument("--reference", default=DEFAULT_REFERENCE, help="glob over row labels: the Welch test's reference row")
-    args = p.parse_args()
-    root = existing_roots([args.root])[0]
-    out = Path(args.out) if args.out else root / "report"
-    try:
-        table = write_tables(root, out, args.reference, [k for k in args.group_by.split(",") if k], args.pool)
-    except (FileNotFoundError, ValueError) as e:
-        print(f"error: {e}", file=sys.stderr)
-        raise SystemExit(1) from None
-    print(f"{len(table)} row(s) written to {out}/steps_to_goal.{{md,tex,csv}}")
+
+    def command(o: Options) -> str:
+        table = write_tables(o.root, o.out, o.args.reference, o.group_by, o.pools)
+        return f"{len(table)} row(s) written to {o.out}/steps_to_goal.{{md,tex,csv}}"
+
+    run(p, command)
 
 
 if __name__ == "__main__":
