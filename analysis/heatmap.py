@@ -107,6 +107,7 @@ def draw(run_dir: Path, out: Path, n: int) -> list[Path]:
         raise RestoreError(f"{run_dir}: method {run.cfg.method_label} has no latent curiosity module to map; "
                            "allowed: runs of the paper's agent (baseline=none)")  # fmt: skip
     grid = plane(str(run.cfg.env.name), n)
+    torch.manual_seed(0)  # the imagined prediction-error bonus samples dropout masks: the same map on every re-run
     values = scores(run.agent, observations(run.cfg, grid))
     ckpt = load_checkpoint(run_dir)
     fig, axes = panels(3, width=3.6, height=3.2)
