@@ -12,6 +12,7 @@ from tensorboard.backend.event_processing.event_accumulator import EventAccumula
 
 from analysis.collect import load_summaries
 from analysis.steps_table import steps_table
+from curiosity.runtime.behaviour import behaviour_keys
 from tests.conftest import run_cli
 
 CHARTS = ["step", "charts/coverage", "charts/wall_time", "charts/sps", "charts/extrinsic_reward", "intrinsic/reward"]
@@ -28,7 +29,7 @@ def test_smoke_run_writes_csv_summary_and_tensorboard(tmp_path: Path) -> None:
     assert (out / ".hydra" / "config.yaml").is_file()
     with (out / "metrics.csv").open() as f:
         rows = list(csv.DictReader(f))
-    assert list(rows[0]) == CHARTS
+    assert list(rows[0]) == [*CHARTS, *behaviour_keys(3, directed=True)]  # the random baseline logs no agent columns
     assert [int(r["step"]) for r in rows] == list(range(10, 201, 10))  # log_every=10 up to the 200-step cap
     cov = [float(r["charts/coverage"]) for r in rows]
     assert all(0 < c <= 1 for c in cov) and cov == sorted(cov)  # coverage never decreases

@@ -12,13 +12,15 @@ from torch import Tensor
 from curiosity.agents.world_model import WorldModel
 from curiosity.errors import NumericalFault
 from curiosity.info.backward import backward_predictor_nll
+from curiosity.info.yardstick import latent_logdet
 from curiosity.losses.model import nstep_backward_loss, nstep_reward_loss, nstep_transition_loss
 from curiosity.nets.onehot import one_hot
 from curiosity.types import SegmentBatch
 
 Regulariser = Callable[[Tensor, Tensor, Tensor], tuple[Tensor, dict[str, float]]]
 
-LOSS_KEYS = ("losses/transition", "losses/entropy", "losses/reward", "losses/backward", "losses/total", "info/gram_offdiag")
+LOSS_KEYS = ("losses/transition", "losses/entropy", "losses/reward", "losses/backward", "losses/total", "info/gram_offdiag",
+             "info/latent_logdet")
 
 
 def check_finite(term: str, value: Tensor) -> None:
@@ -59,7 +61,8 @@ def representation_loss(
 ) -> tuple[Tensor, dict[str, float]]:
     """L_total for one batch; returns the loss and every term as a float (keys in ``LOSS_KEYS``).
 
-    The regulariser sees the first transition of each segment: (z_t, a_t, z_{t+1}).
+    The regulariser sees the first transition of each segment: (z_t, a_t, z_{t+1}); ``info/latent_logdet`` is the
+    common yardstick :func:`~curiosity.info.latent_logdet` of the same next latents z_{t+1}.
     """
     z, a1h = enc.z, enc.a1h
     targets = z[:, 1:].detach() if w.detach_targets else z[:, 1:]
@@ -70,7 +73,7 @@ def representation_loss(
     l_reg, logs = regulariser(z[:, 0], a1h[:, 0], z[:, 1])
     check_finite("losses/entropy", l_reg)
     total = w.transition * l_trans + l_reg
-    logs = {"losses/transition": l_trans.item(), **logs}
+    logs = {"losses/transition": l_trans.item(), **logs, "info/latent_logdet": latent_logdet(z[:, 1])}
     if w.reward > 0 and model.reward_model is not None:
         l_r = nstep_reward_loss(z[:, :-1], a1h, seg.rewards, seg.terminateds, model.reward_model)
         check_finite("losses/reward", l_r)

@@ -1,0 +1,100 @@
+"""Which table row each run belongs to, decided from its resolved ``.hydra/config.yaml`` (never from directory names).
+
+A row is (env, method label) plus the config keys that distinguish runs of that pair: every key present in all of the
+pair's runs whose value differs between them (``seed`` and the bookkeeping keys in ``IGNORED`` left out). Two runs of
+the default agent, one with ``planner.horizon=5 planner.temperature=0``, become the rows
+``ours-… [planner.horizon=3, planner.temperature=0.02]`` and ``ours-… [planner.horizon=5, planner.temperature=0]``.
+``group_by`` names the keys instead (dotted config paths, e.g. ``entropy.name``); ``pool`` merges rows explicitly.
+"""
+
+from __future__ import annotations
+
+import fnmatch
+import json
+from collections.abc import Sequence
+from pathlib import Path
+
+import pandas as pd
+from omegaconf import OmegaConf
+
+from analysis.collect import run_dirs
+
+# Keys that change neither the agent nor the environment: left out of a row's identity.
+IGNORED = ("seed", "progress", "threads", "resume", "checkpoint_every")
+
+
+def flat_config(run_dir: str | Path) -> dict[str, object]:
+    """A run's ``.hydra/config.yaml``, resolved where it can be, flattened to ``{"planner.horizon": 3, ...}``."""
+    cfg = OmegaConf.load(Path(run_dir) / ".hydra" / "config.yaml")
+    try:
+        tree = OmegaConf.to_container(cfg, resolve=True)
+    except Exception:  # an interpolation that needs a resolver of the runner: keep the raw text
+        tree = OmegaConf.to_container(cfg, resolve=False)
+    flat: dict[str, object] = {}
+
+    def walk(node: object, prefix: str) -> None:
+        if isinstance(node, dict):
+            for key, value in node.items():
+                walk(value, f"{prefix}{key}.")
+        else:
+            flat[prefix[:-1]] = tuple(node) if isinstance(node, list) else node
+
+    walk(tree, "")
+    return flat
+
+
+def load_runs(root: str | Path) -> pd.DataFrame:
+    """One row per finished run below ``root``: env, method, seed, steps-to-goal, its value with a censored run at its
+    last step (``steps``), ``censored``, ``cap``, the run's flat config under ``config`` and ``run_dir``."""
+    rows = []
+    for d in run_dirs(root):
+        summary = json.loads((d / "summary.json").read_text())
+        cfg = flat_config(d)
+        reached = bool(summary["reached_goal"])
+        cap = int(summary["max_steps"])
+        last = int(summary.get("env_steps") or cap)  # the paper's Table 2 rule: a censored run counts at its last step
+        rows.append({
+            "env": str(cfg.get("env.name", summary.get("env"))), "method": str(summary["method"]),
+            "seed": int(summary["seed"]),
+            "reached": reached, "steps": float(summary["steps_to_goal"]) if reached else float(last),
+            "censored": not reached, "cap": cap, "wall_seconds": float(summary.get("wall_seconds", float("nan"))),
+            "config": cfg, "run_dir": str(d),
+        })  # fmt: skip
+    return pd.DataFrame(rows)
+
+
+def _value(config: dict[str, object], key: str) -> str:
+    value = config.get(key, "–")
+    return ",".join(map(str, value)) if isinstance(value, tuple) else str(value)
+
+
+def distinguishing_keys(configs: Sequence[dict[str, object]]) -> list[str]:
+    """The keys present in every config whose values are not all equal (``IGNORED`` left out), sorted."""
+    common = set.intersection(*(set(c) for c in configs)) - set(IGNORED)
+    return sorted(k for k in common if len({repr(c[k]) for c in configs}) > 1)
+
+
+def label_rows(runs: pd.DataFrame, group_by: Sequence[str] = ()) -> pd.DataFrame:
+    """``runs`` with a ``row`` column: the method label plus its distinguishing keys, or the ``group_by`` keys' values."""
+    runs = runs.copy()
+    labels = pd.Series("", index=runs.index, dtype=object)
+    for (_env, method), g in runs.groupby(["env", "method"], sort=True):
+        keys = list(group_by) or distinguishing_keys(list(g["config"]))
+        for i, cfg in g["config"].items():
+            extra = ", ".join(f"{k}={_value(cfg, k)}" for k in keys)
+            labels[i] = f"{method} [{extra}]" if extra and not group_by else (extra if group_by else method)
+    runs["row"] = labels
+    return runs
+
+
+def pool_rows(runs: pd.DataFrame, pools: Sequence[str]) -> pd.DataFrame:
+    """Merge rows: each ``LABEL=PATTERN`` renames every row matching the glob ``PATTERN`` to ``LABEL`` (per env), and
+    keeps the row it came from in ``stratum`` (the bootstrap resamples seeds within each stratum)."""
+    runs = runs.copy()
+    runs["stratum"] = runs["row"]
+    for pool in pools:
+        label, sep, pattern = pool.partition("=")
+        if not sep or not label or not pattern:
+            raise ValueError(f"--pool {pool}: expected LABEL=PATTERN (a glob over row labels)")
+        runs.loc[[fnmatch.fnmatchcase(r, pattern) for r in runs["row"]], "row"] = label
+    return runs

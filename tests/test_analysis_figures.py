@@ -1,0 +1,64 @@
+"""``analysis.figures`` on synthetic run directories: every figure is written as a PNG and a PDF that open, the same
+bytes on a re-run, and the stable-reward steps are the ones the criterion gives."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from PIL import Image
+
+from analysis.curves import mean_band, stable_step
+from analysis.figures import FIGURES, write_figures
+from tests.synthetic_runs import make_runs
+from tests.test_analysis import analysis
+
+
+@pytest.fixture(scope="module")
+def written(tmp_path_factory: pytest.TempPathFactory) -> tuple:
+    root = make_runs(tmp_path_factory.mktemp("runs"))
+    out = root.parent / "figures"
+    return root, out, write_figures(root, out, pools=["ours (Rényi, pooled)=ours-*renyi*"])
+
+
+def test_every_figure_is_a_png_and_a_pdf_that_open(written: tuple) -> None:
+    _, out, files = written
+    for name in FIGURES:
+        png, pdf = out / f"{name}.png", out / f"{name}.pdf"
+        assert png in files and pdf in files and png.stat().st_size > 0
+        with Image.open(png) as im:
+            im.verify()
+        assert pdf.read_bytes().startswith(b"%PDF") and b"CreationDate" not in pdf.read_bytes()
+
+
+def test_stability_lists_each_seed_and_kde_settles_before_knn(written: tuple) -> None:
+    _, out, _ = written
+    table = pd.read_csv(out / "stability.csv")
+    assert len(table) == 16  # every finished synthetic run logs intrinsic/reward
+    by = table.groupby("estimator")["stable_step"].median()
+    assert by["kde"] < by["knn"]  # the synthetic KDE reward decays 4× faster
+    assert "| mountaincar | ours (Rényi, pooled) |" in (out / "stability.md").read_text()
+
+
+def test_stable_step_and_band_on_known_series() -> None:
+    steps = np.arange(1, 61) * 10
+    reward = np.r_[np.tile([1.0, 3.0], 20), np.full(20, 2.0)]  # CV 0.51 while alternating, 0 once constant
+    assert stable_step(steps, reward, window=10, cv=0.1) == 500.0  # the first window wholly in the constant part
+    assert np.isnan(stable_step(steps, np.tile([1.0, 3.0], 30), window=10, cv=0.1))
+    curve = mean_band(pd.DataFrame({"a": [1.0, 2.0], "b": [3.0, np.nan]}, index=[10, 20]))
+    assert curve.mean.tolist() == [2.0, 2.0] and curve.n.tolist() == [2, 1]
+    assert curve.low[0] == 1.0 and curve.high[0] == 3.0 and np.isnan(curve.low[1])  # percentiles of {1, 2, 3}
+
+
+def test_the_command_rewrites_the_same_bytes(written: tuple, tmp_path) -> None:
+    root, _, files = written
+    res = analysis("figures", root, "--out", tmp_path, "--pool", "ours (Rényi, pooled)=ours-*renyi*")
+    assert res.returncode == 0, res.stderr
+    for f in files:
+        assert (tmp_path / f.name).read_bytes() == f.read_bytes(), f.name  # exact: the same drawing, no timestamps
+
+
+def test_no_finished_run_is_one_line(tmp_path) -> None:
+    for root in (tmp_path, tmp_path / "missing"):
+        res = analysis("figures", root)
+        assert res.returncode != 0 and res.stderr.startswith("error: ") and len(res.stderr.splitlines()) == 1

@@ -1,0 +1,37 @@
+"""``analysis.report``: one Markdown file embedding the table and every figure, each of which exists."""
+
+from __future__ import annotations
+
+import re
+
+from analysis.figures import FIGURES
+from tests.synthetic_runs import make_runs
+from tests.conftest import REPO
+from tests.test_analysis import analysis
+
+
+def test_the_report_embeds_the_table_and_every_figure(tmp_path) -> None:
+    root = make_runs(tmp_path / "runs")
+    res = analysis("report", root, "--pool", "ours (Rényi, pooled)=ours-*renyi*")
+    assert res.returncode == 0, res.stderr
+    out = root / "report"
+    text = (out / "README.md").read_text()
+    assert "| mountaincar | ours (Rényi, pooled) | 4 / 5 | 1500, 1700, 1300, >1900, 1100 | 1500.0 ± 141.4 |" in text
+    assert "--pool 'ours (Rényi, pooled)=ours-*renyi*'" in text and "stopped: " in text
+    images = re.findall(r"!\[[^\]]*\]\(([^)]+)\)", text)
+    assert images == [f"{name}.png" for name in FIGURES]
+    assert all((out / image).stat().st_size > 0 for image in images)
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    assert analysis("report", root, "--pool", "ours (Rényi, pooled)=ours-*renyi*").returncode == 0
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before  # exact: a re-run rewrites the same bytes
+
+
+def test_the_committed_report_tables_are_what_the_command_writes(tmp_path) -> None:
+    """``results/report`` is up to date: the tables rebuilt from ``results/`` are byte for byte the committed ones
+    (figures are left out here: their pixels depend on the machine's fonts)."""
+    res = analysis("report", "results", "--out", tmp_path)
+    assert res.returncode == 0, res.stderr
+    committed = REPO / "results" / "report"
+    for name in ("steps_to_goal.md", "steps_to_goal.tex", "steps_to_goal.csv", "incomplete.csv", "stability.md",
+                 "stability.csv", "README.md"):  # fmt: skip
+        assert (tmp_path / name).read_bytes() == (committed / name).read_bytes(), name  # exact: text of the same numbers

@@ -1,0 +1,102 @@
+"""``analysis.tables`` on synthetic run directories with known numbers: exact means and SEs, scipy's Welch p and
+bootstrap CI on the same arrays, config-defined rows, explicit pooling, censored, failed and stopped runs."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy import stats
+
+from analysis.rows import label_rows, load_runs, pool_rows
+from analysis.stats import iqm_ci
+from analysis.tables import paper_numbers, steps_table, write_tables
+from tests.synthetic_runs import RENYI, RENYI_MI, make_runs
+from tests.test_analysis import analysis
+
+POOL = "ours (Rényi, pooled)=ours-*renyi*"
+
+
+@pytest.fixture(scope="module")
+def root(tmp_path_factory: pytest.TempPathFactory):
+    return make_runs(tmp_path_factory.mktemp("runs"))
+
+
+@pytest.fixture(scope="module")
+def table(root) -> pd.DataFrame:
+    return write_tables(root, root.parent / "out", pools=[POOL]).set_index(["env", "row"])
+
+
+def test_rows_come_from_the_config_not_the_directory(root) -> None:
+    rows = sorted(set(label_rows(load_runs(root))["row"]))
+    assert rows == ["nsrs", "nsrs [planner.horizon=3]", "nsrs [planner.horizon=5]", RENYI, RENYI_MI, "random"]
+    by_entropy = sorted(set(label_rows(load_runs(root), ["entropy.name"])["row"]))
+    assert by_entropy == ["entropy.name=none", "entropy.name=renyi", "entropy.name=renyi_mi"]  # across methods
+
+
+def test_censored_runs_count_at_their_cap_and_successes_apart(table: pd.DataFrame) -> None:
+    r = table.loc[("mountaincar", "nsrs")]
+    assert (r.seeds, r.reached, r.per_seed) == (4, 3, "1000 1200 >1900 800")
+    assert r["mean"] == 1225.0  # exact: (1000 + 1200 + 1900 + 800) / 4
+    assert r.se == pytest.approx(np.std([1000, 1200, 1900, 800], ddof=1) / 2, rel=1e-12)
+    assert r.mean_success == 1000.0 and r.se_success == pytest.approx(200 / math.sqrt(3), rel=1e-12)
+    assert r["median"] == 1100.0 and r.iqm == 1100.0  # the middle two of four
+
+
+def test_pooling_is_explicit_and_the_bootstrap_is_stratified(root, table: pd.DataFrame) -> None:
+    assert ("mountaincar", RENYI) not in table.index
+    r = table.loc[("mountaincar", "ours (Rényi, pooled)")]
+    assert (r.seeds, r.reached, r.per_seed) == (5, 4, "1500 1700 1300 >1900 1100")
+    assert r["mean"] == 1500.0 and r.se == pytest.approx(np.std([1500, 1700, 1300, 1900, 1100], ddof=1) / math.sqrt(5))
+    assert r.paper_mean == 1456.9 and r.paper_se == 125.7 and r.paper_seeds == 8
+    res = stats.bootstrap(([1500.0, 1700.0], [1300.0, 1900.0, 1100.0]),
+                          lambda a, b, axis: stats.trim_mean(np.concatenate([a, b], axis=axis), 0.25, axis=axis),
+                          n_resamples=2000, method="percentile", rng=np.random.default_rng(0))  # fmt: skip
+    low, high = res.confidence_interval
+    assert (r.iqm_low, r.iqm_high) == pytest.approx((low, high), rel=1e-9)
+    assert iqm_ci([[1500.0, 1700.0], [1300.0, 1900.0, 1100.0]]) == pytest.approx((1500.0, low, high), rel=1e-9)
+
+
+def test_welch_p_against_the_reference_row_is_scipys(table: pd.DataFrame, root) -> None:
+    r = table.loc[("mountaincar", "ours (Rényi, pooled)")]
+    expected = stats.ttest_ind([1500, 1700, 1300, 1900, 1100], [1000, 1200, 1900, 800], equal_var=False).pvalue
+    assert r.welch_p == pytest.approx(expected, rel=1e-9)
+    assert math.isnan(table.loc[("mountaincar", "nsrs")].welch_p)  # the reference itself
+    runs = pool_rows(label_rows(load_runs(root)), [POOL])
+    other = steps_table(runs, reference="random", numbers=paper_numbers()).set_index(["env", "row"])
+    p = stats.ttest_ind([600, 700, 500], [1700, 2100], equal_var=False).pvalue
+    assert other.loc[("acrobot", "nsrs [planner.horizon=3]")].welch_p == pytest.approx(p, rel=1e-9)
+    assert math.isnan(other.loc[("mountaincar", "nsrs")].welch_p)  # no random row in MountainCar
+
+
+def test_paper_numbers_sit_beside_ours_with_their_source(table: pd.DataFrame) -> None:
+    r = table.loc[("acrobot", "random")]
+    assert (r.paper_mean, r.paper_se, r.paper_method) == (1713.3, 316.3, "Random") and "NSRS" in r.paper_source
+    assert {p["method"] for p in paper_numbers()} >= {"ICM", "RND", "Novelty (NSRS)", "Ours", "Random"}
+
+
+def test_the_files_list_the_runs_not_finished(root, table: pd.DataFrame) -> None:
+    out = root.parent / "out"
+    md = (out / "steps_to_goal.md").read_text()
+    assert "| mountaincar | nsrs | 3 / 4 | 1000, 1200, >1900, 800 | 1225.0 ± 239.4 | 1000.0 ± 115.5 |" in md
+    assert "failed: " in md and "random/h3/seed=2" in md and "stopped: " in md and "random/h3/seed=3" in md
+    incomplete = pd.read_csv(out / "incomplete.csv")
+    assert sorted(incomplete["status"]) == ["failed", "stopped"]
+    assert r"\begin{tabular}" in (out / "steps_to_goal.tex").read_text()
+    assert len(pd.read_csv(out / "steps_to_goal.csv")) == len(table)
+
+
+def test_the_command_writes_the_same_bytes_twice(root, tmp_path) -> None:
+    for name in ("a", "b"):
+        res = analysis("tables", root, "--out", tmp_path / name, "--pool", POOL)
+        assert res.returncode == 0, res.stderr
+    for f in ("steps_to_goal.md", "steps_to_goal.tex", "steps_to_goal.csv", "incomplete.csv"):
+        assert (tmp_path / "a" / f).read_bytes() == (tmp_path / "b" / f).read_bytes()  # exact: the same computation
+
+
+def test_bad_input_is_one_line(tmp_path) -> None:
+    for args in ([tmp_path], [tmp_path / "missing"], [tmp_path, "--pool", "nolabel"]):
+        res = analysis("tables", *args)
+        assert res.returncode != 0 and res.stderr.startswith("error: ") and len(res.stderr.splitlines()) == 1
