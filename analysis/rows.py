@@ -18,18 +18,21 @@ import pandas as pd
 from omegaconf import OmegaConf
 
 from analysis.collect import run_dirs
+from curiosity.config.compose import saved_config
 
 # Keys that change neither the agent nor the environment: left out of a row's identity.
 IGNORED = ("seed", "progress", "threads", "resume", "checkpoint_every")
 
 
 def flat_config(run_dir: str | Path) -> dict[str, object]:
-    """A run's ``.hydra/config.yaml``, resolved where it can be, flattened to ``{"planner.horizon": 3, ...}``."""
-    cfg = OmegaConf.load(Path(run_dir) / ".hydra" / "config.yaml")
+    """A run's ``.hydra/config.yaml`` over the current defaults of its group choices (so that a key added after the run
+    was made has its default, which keeps the old behaviour, and an oracle run is told apart from the learned-model
+    runs made before ``planner.model`` existed), resolved where it can be, flattened to ``{"planner.horizon": 3}``."""
+    cfg = saved_config(run_dir)
     try:
-        tree = OmegaConf.to_container(cfg, resolve=True)
+        tree = OmegaConf.to_container(cfg, resolve=True, enum_to_str=True)
     except Exception:  # an interpolation that needs a resolver of the runner: keep the raw text
-        tree = OmegaConf.to_container(cfg, resolve=False)
+        tree = OmegaConf.to_container(cfg, resolve=False, enum_to_str=True)
     flat: dict[str, object] = {}
 
     def walk(node: object, prefix: str) -> None:

@@ -10,12 +10,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from hydra.errors import HydraException
-from omegaconf import DictConfig, OmegaConf
-from omegaconf.errors import OmegaConfBaseException
+from omegaconf import DictConfig
 
-from curiosity.config import build, setup
-from curiosity.config.compose import compose_config
+from curiosity.config import build
+from curiosity.config.compose import saved_config
 from curiosity.envs import make_env
 from curiosity.envs.state import restore_env
 from curiosity.runtime.checkpoint import CHECKPOINT, load_checkpoint
@@ -37,26 +35,6 @@ class RestoredRun:
     step: int
 
 
-GROUPS = ("env", "encoder", "entropy", "estimator", "backward", "baseline", "planner", "budget")
-
-
-def _config(run_dir: Path) -> DictConfig:
-    """The run's saved config over the current defaults of its group choices, so that a run made before a key existed
-    gets that key's default (every new key's default keeps the old behaviour); the saved config alone if that fails."""
-    setup()
-    saved = OmegaConf.load(run_dir / ".hydra" / "config.yaml")
-    assert isinstance(saved, DictConfig)
-    choices = [f"{g}={saved[g].name}" for g in GROUPS if g in saved and "name" in saved[g]]
-    try:
-        base = compose_config(choices)
-        OmegaConf.set_struct(base, False)
-        merged = OmegaConf.merge(base, saved)
-    except (OmegaConfBaseException, HydraException, ValueError):  # options that no longer exist
-        return saved
-    assert isinstance(merged, DictConfig)
-    return merged
-
-
 def restore_run(run_dir: str | Path) -> RestoredRun:
     """Load ``run_dir/.hydra/config.yaml`` and ``run_dir/checkpoint.pt`` (read only).
 
@@ -70,7 +48,7 @@ def restore_run(run_dir: str | Path) -> RestoredRun:
     if not (run_dir / CHECKPOINT).is_file():
         raise RestoreError(f"{run_dir}: no {CHECKPOINT} (checkpoints are not committed with results; re-run the run's "
                            "command to make one)")  # fmt: skip
-    cfg = _config(run_dir)
+    cfg = saved_config(run_dir)
     ckpt = load_checkpoint(run_dir)
     assert ckpt is not None
     env = make_env(cfg.env, cfg.budget.max_steps)
