@@ -25,24 +25,8 @@ from curiosity.envs.energy import energy_fn
 from curiosity.envs.simulator import Simulator
 from curiosity.novelty.estimators import KDENovelty, KNNNovelty
 from curiosity.planning.probe import tree_latents
-from curiosity.planning.rollout import SimulatorRollout
+from curiosity.planning.rollout import ReplayRollout, SimulatorRollout
 from curiosity.runtime.restore import RestoreError, restore_run
-
-
-class ReplayRollout:
-    """Precomputed tree latents (one (A^k, d) tensor per depth, lexicographic), replayed for a full enumeration."""
-
-    def __init__(self, z0: Tensor, levels: list[Tensor]) -> None:
-        self.z, self.levels, self.depth = z0.unsqueeze(0), levels, 0
-
-    def latents(self) -> Tensor:
-        return self.z
-
-    def expand(self, parents: Tensor, actions: Tensor) -> Tensor:
-        self.z = self.levels[self.depth]
-        assert len(parents) == len(self.z), "ReplayRollout replays the full enumeration only"
-        self.depth += 1
-        return self.z
 
 
 def _variants(agent, bandwidths: list[float], k: int) -> dict[str, Callable[[Tensor], Tensor]]:

@@ -23,7 +23,7 @@ from torch import Tensor
 
 from curiosity.envs.simulator import Simulator, SimStates
 from curiosity.planning.mpc import IntrinsicFn, MPCPlanner, ScoreFn
-from curiosity.planning.rollout import LatentRollout, Rollout, SimulatorRollout, StepFn
+from curiosity.planning.rollout import LatentRollout, ReplayRollout, Rollout, SimulatorRollout, StepFn
 
 
 def tree_latents(rollout: Rollout, n_actions: int, horizon: int) -> list[Tensor]:
@@ -81,8 +81,9 @@ def probe_model(planner: MPCPlanner, z0: Tensor, step_fn: StepFn, reward_fn: Sco
             out[f"probe/effect_ratio/{k}"] = effect_pred / effect_true
     seqs = planner.candidates(torch.Generator().manual_seed(0))
     g_model = planner.scores(z0, seqs, step_fn, reward_fn, intrinsic_fn).cpu().numpy()
-    g_true = planner.scores(z0, seqs, step_fn, reward_fn, intrinsic_fn,
-                            rollout=SimulatorRollout(simulator, root, z0, encode)).cpu().numpy()  # fmt: skip
+    full = len(seqs) == a**h  # all sequences: score the true tree above again instead of simulating it twice
+    replay = ReplayRollout(z0, true) if full else SimulatorRollout(simulator, root, z0, encode)
+    g_true = planner.scores(z0, seqs, step_fn, reward_fn, intrinsic_fn, rollout=replay).cpu().numpy()
     if np.ptp(g_model) > 0 and np.ptp(g_true) > 0:
         out["probe/spearman"] = float(spearmanr(g_model, g_true).statistic)
     out["probe/agree"] = float(int(seqs[int(np.argmax(g_model)), 0]) == int(seqs[int(np.argmax(g_true)), 0]))

@@ -10,7 +10,6 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Protocol
 
-import numpy as np
 import torch
 from torch import Tensor
 
@@ -68,14 +67,29 @@ class SimulatorRollout:
     def __init__(self, simulator: Simulator, root: SimStates, z0: Tensor, encode: EncodeFn) -> None:
         self.simulator, self.states, self.encode = simulator, root, encode
         self.z = z0.unsqueeze(0)
-        self.goal = np.zeros(1, dtype=bool)
 
     def latents(self) -> Tensor:
         return self.z
 
     def expand(self, parents: Tensor, actions: Tensor) -> Tensor:
         index = parents.cpu().numpy()
-        self.states, goal = self.simulator.step(self.states.take(index), actions.cpu().numpy())
-        self.goal = self.goal[index] | goal
+        self.states, _ = self.simulator.step(self.states.take(index), actions.cpu().numpy())
         self.z = self.encode(torch.as_tensor(self.states.obs, device=self.z.device))
+        return self.z
+
+
+class ReplayRollout:
+    """Tree latents computed before (one (A^k, d) tensor per depth k = 1..H, prefixes in lexicographic order), replayed
+    for a full enumeration, so that a tree expanded once can be scored again without stepping anything."""
+
+    def __init__(self, z0: Tensor, levels: list[Tensor]) -> None:
+        self.z, self.levels, self.depth = z0.unsqueeze(0), levels, 0
+
+    def latents(self) -> Tensor:
+        return self.z
+
+    def expand(self, parents: Tensor, actions: Tensor) -> Tensor:
+        self.z = self.levels[self.depth]
+        assert len(parents) == len(self.z), "ReplayRollout replays the full enumeration only"
+        self.depth += 1
         return self.z
