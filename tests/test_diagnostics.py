@@ -265,3 +265,15 @@ def test_landscape_command_reports_every_variant_and_refuses_the_chain(
     finished_run(chain, tmp_path / "chain")
     assert main([str(tmp_path / "chain")]) == 2
     assert "Acrobot or MountainCar" in capsys.readouterr().err
+
+
+def test_diagnostics_do_not_change_what_the_agent_does(tmp_path: Path) -> None:
+    """The noise check and the probe draw dropout masks in a forked RNG: the actions are the same without them
+    (same config, seed and machine, one thread: exact)."""
+    common = [*FAST, "deterministic=true"]
+    with_probe = run(compose_cfg([*common, "probe_every=10"]), tmp_path / "a")
+    without = run(compose_cfg([*common, "probe_every=0"]), tmp_path / "b")
+    assert with_probe.behaviour == without.behaviour  # exact: same seed, same machine, deterministic mode
+    rows = [(tmp_path / d / "metrics.csv").read_text().splitlines() for d in ("a", "b")]
+    col = rows[0][0].split(",").index("intrinsic/reward")
+    assert [r.split(",")[col] for r in rows[0][1:]] == [r.split(",")[col] for r in rows[1][1:]]

@@ -177,8 +177,9 @@ class PaperAgent(Agent):
                     "planner/entropy": info.get("entropy", 0.0), "timing/plan_ms": plan_ms}  # fmt: skip
             logs.update({f"planner/{k}": v for k, v in info.items()
                          if k.startswith(("spread/", "p_first/")) or k == "first_action_entropy"})  # fmt: skip
-            logs.update(self._score_noise(z0, obs))
-            logs.update(self._probe(z0, obs, step))
+            with torch.random.fork_rng(devices=[]):  # diagnostics draw dropout masks but never change the run's stream
+                logs.update(self._score_noise(z0, obs))
+                logs.update(self._probe(z0, obs, step))
         self._tally(logs)
         self._plan_logs = logs
         return action
