@@ -1,0 +1,241 @@
+"""Does the learned latent make unseen states look novel? ``python -m analysis.representation [OVERRIDES...]``.
+
+Novelty can only guide exploration if the encoder maps states the agent has not met away from those it has. This
+check trains the paper agent's world model (the config the overrides compose, as ``runners.train`` would) offline on
+one fixed random-policy dataset, and at each of ``--iters`` gradient iterations encodes two probe sets the model never
+trained on: held-out random-policy states, and states of a hand-made pumping policy
+(:mod:`curiosity.envs.directed`) that reach energies random play does not. It reports, per checkpoint:
+
+- ``auc``: how often a pumping state is more novel than a held-out random state under the run's estimator fitted to
+  the training latents (0.5: novelty cannot tell them apart; 1: every pumping state is more novel);
+- ``auc_physical``: the same estimator on the standardised physical state, the reference a perfect state encoder
+  gives;
+- ``rho_energy``: Spearman correlation between latent novelty and mechanical energy (:mod:`curiosity.envs.energy`)
+  over both probe sets;
+- ``r2``: how well the latent determines each physical state variable (1-nearest-neighbour regression from the
+  training latents to the held-out random states: 1 perfect, ≤ 0 no information).
+
+Nothing is written unless ``--json FILE`` is given. The numbers depend on the data seed and the model's seed; they are
+a diagnostic, not a result, and are meant to be compared across configurations at the same seeds.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import torch
+from omegaconf import DictConfig
+from scipy.stats import spearmanr
+
+from curiosity.agents.paper import PaperAgent
+from curiosity.config import ConfigError, validate
+from curiosity.config.build import build, choice
+from curiosity.config.compose import COMPOSE_ERRORS, compose_config, describe_compose_error
+from curiosity.config.overrides import appended_key_errors
+from curiosity.envs import make_env, physical_state
+from curiosity.envs.directed import directed_action_fn
+from curiosity.envs.energy import energy_fn
+from curiosity.runtime.preflight import task_config
+
+Policy = Callable[[np.ndarray, np.random.Generator], int]
+
+
+@dataclass
+class Trajectory:
+    """Transitions of one policy: obs (T, *obs), actions (T,), next obs (T, *obs), physical state reached (T, P)."""
+
+    obs: np.ndarray
+    actions: np.ndarray
+    next_obs: np.ndarray
+    physical: np.ndarray
+
+
+def rollout(cfg: DictConfig, steps: int, policy: Policy, seed: int) -> Trajectory:
+    """``steps`` transitions of ``policy`` (physical state, rng -> action) in the run's env from ``reset(seed)``."""
+    env = make_env(cfg.env, max_steps=10**9)
+    obs, _ = env.reset(seed=seed)
+    rng = np.random.default_rng(seed)
+    rows: list[tuple[Any, int, Any, np.ndarray]] = []
+    for _ in range(steps):
+        action = policy(physical_state(env), rng)
+        next_obs, _, _, _, _ = env.step(action)
+        rows.append((obs, action, next_obs, physical_state(env).copy()))
+        obs = next_obs
+    env.close()
+    o, a, n, p = zip(*rows, strict=True)
+    return Trajectory(np.asarray(o), np.asarray(a), np.asarray(n), np.asarray(p))
+
+
+def pumping_policy(env_id: str) -> Policy:
+    """The directed action wherever it exists (push with the motion), the no-op (action 1) where it does not."""
+    directed = directed_action_fn(env_id)
+    if directed is None:
+        raise ConfigError([f"env.id={env_id}: the representation check needs an env with a directed action; "
+                           "allowed: Acrobot-v1, MountainCar-v0"])  # fmt: skip
+
+    def policy(state: np.ndarray, rng: np.random.Generator) -> int:
+        action = directed(state)
+        return 1 if action is None else action
+
+    return policy
+
+
+def random_policy(n_actions: int) -> Policy:
+    return lambda state, rng: int(rng.integers(n_actions))
+
+
+def auc(positive: np.ndarray, negative: np.ndarray) -> float:
+    """P(a positive score > a negative one) + ½ P(tie), over all pairs: (P,), (N,) -> [0, 1]."""
+    diff = positive[:, None] - negative[None, :]
+    return float((diff > 0).mean() + 0.5 * (diff == 0).mean())
+
+
+def nn_r2(train_z: np.ndarray, train_y: np.ndarray, test_z: np.ndarray, test_y: np.ndarray) -> np.ndarray:
+    """R² per column of predicting test_y (T, P) by the y of each test latent's nearest training latent."""
+    d2 = ((test_z[:, None, :] - train_z[None, :, :]) ** 2).sum(-1)
+    pred = train_y[d2.argmin(1)]
+    var = ((test_y - test_y.mean(0)) ** 2).sum(0)
+    return 1.0 - ((pred - test_y) ** 2).sum(0) / np.where(var > 0, var, np.nan)
+
+
+def novelty_scores(cfg: DictConfig, memory: np.ndarray, queries: np.ndarray, warmup: int) -> np.ndarray:
+    """The run's estimator (``estimator`` group) fitted to ``memory`` (N, D), scoring ``queries`` (Q, D) -> (Q,).
+    Both are standardised by the memory's statistics first, as the agent does with ``standardise_latents``."""
+    mean, std = memory.mean(0), memory.std(0).clip(min=1e-8)
+    mem = torch.as_tensor((memory - mean) / std, dtype=torch.float32)
+    estimator = build(cfg.estimator)
+    estimator.fit(mem, mem[: max(2, min(warmup, len(mem)))])
+    return estimator(torch.as_tensor((queries - mean) / std, dtype=torch.float32)).double().numpy()
+
+
+def study_config(overrides: Sequence[str]) -> DictConfig:
+    """The run config of ``overrides``, checked as ``runners.train`` checks it; the paper's agent only."""
+    overrides = list(overrides)
+    try:
+        cfg = compose_config(overrides, hydra_node=True)
+    except COMPOSE_ERRORS as err:
+        raise ConfigError([describe_compose_error(err, overrides)]) from None
+    errors = appended_key_errors(overrides, cfg, cfg.hydra.runtime.choices)
+    if errors:
+        raise ConfigError(errors)
+    task = task_config(cfg)
+    validate(task)
+    if choice(task.baseline.name) != "none" or choice(task.env.obs) != "pixels":
+        what = f"baseline={choice(task.baseline.name)} env.obs={choice(task.env.obs)}"
+        raise ConfigError([f"{what}: the representation check trains the paper agent's world model from pixels; "
+                           "allowed: baseline=none with env.obs=pixels"])  # fmt: skip
+    return task
+
+
+@dataclass
+class ProbeSets:
+    """The fixed data of a study: training transitions, held-out random states, pumping states."""
+
+    train: Trajectory
+    random: Trajectory
+    pumping: Trajectory
+
+
+def probe_sets(cfg: DictConfig, train_steps: int, probe_steps: int, data_seed: int) -> ProbeSets:
+    """Random-policy training data (``train_steps``), ``probe_steps`` held-out random states (another seed) and
+    ``probe_steps`` pumping states (the first ``probe_steps // 5`` of the pumping run, near rest, left out)."""
+    n_actions = int(cfg.env.n_actions)
+    train = rollout(cfg, train_steps, random_policy(n_actions), data_seed)
+    held_out = rollout(cfg, probe_steps, random_policy(n_actions), data_seed + 1)
+    skip = probe_steps // 5
+    pump = rollout(cfg, probe_steps + skip, pumping_policy(str(cfg.env.id)), data_seed + 2)
+    pump = Trajectory(*(x[skip:] for x in (pump.obs, pump.actions, pump.next_obs, pump.physical)))
+    return ProbeSets(train, held_out, pump)
+
+
+def _encode(agent: PaperAgent, obs: np.ndarray) -> np.ndarray:
+    with agent.model.evaluating(), torch.no_grad():
+        parts = [agent.model.encode(torch.as_tensor(obs[i : i + 256], dtype=torch.float32)) for i in range(0, len(obs), 256)]
+    return torch.cat(parts).double().numpy()
+
+
+def measure(agent: PaperAgent, cfg: DictConfig, data: ProbeSets) -> dict[str, Any]:
+    """The metrics of the module docstring for the agent's current encoder."""
+    z_train, z_rand, z_pump = (_encode(agent, t.next_obs) for t in (data.train, data.random, data.pumping))
+    warmup = int(cfg.budget.warmup_steps)
+    nov = novelty_scores(cfg, z_train, np.concatenate([z_rand, z_pump]), warmup)
+    p_train, p_rand, p_pump = data.train.physical, data.random.physical, data.pumping.physical
+    nov_phys = novelty_scores(cfg, p_train, np.concatenate([p_rand, p_pump]), warmup)
+    energy = energy_fn(str(cfg.env.id))
+    assert energy is not None  # every env with a directed action has an energy
+    r = len(z_rand)
+    return {"auc": auc(nov[r:], nov[:r]), "auc_physical": auc(nov_phys[r:], nov_phys[:r]),
+            "rho_energy": float(spearmanr(nov, energy(np.concatenate([p_rand, p_pump]))).statistic),
+            "r2": [round(float(v), 3) for v in nn_r2(z_train, p_train, z_rand, p_rand)],
+            "latent_std": [round(float(v), 3) for v in z_train.std(0)]}  # fmt: skip
+
+
+def study(overrides: Sequence[str], iters: Sequence[int], train_steps: int = 600, probe_steps: int = 300,
+          data_seed: int = 1) -> list[dict[str, Any]]:  # fmt: skip
+    """Train the configured world model on the fixed random-policy data; measure at each of ``iters`` (ascending)."""
+    cfg = study_config(overrides)
+    torch.set_num_threads(int(cfg.threads))
+    torch.manual_seed(int(cfg.seed))
+    data = probe_sets(cfg, train_steps, probe_steps, data_seed)
+    agent = PaperAgent(cfg)
+    for i in range(train_steps):
+        agent.replay.add(data.train.obs[i], int(data.train.actions[i]), -1.0, data.train.next_obs[i], False)
+    out, done = [], 0
+    for target in iters:
+        agent.model.train()
+        for _ in range(target - done):
+            agent._iteration()
+        done = target
+        out.append({"iters": done, **measure(agent, cfg, data)})
+    return out
+
+
+def _table(rows: list[dict[str, Any]]) -> str:
+    lines = ["| iterations | AUC pumping vs random (latent) | AUC (physical state) | Spearman(novelty, energy) | "
+             "1-NN R² per physical variable | latent std |", "|---|---|---|---|---|---|"]  # fmt: skip
+    for r in rows:
+        lines.append(
+            f"| {r['iters']} | {r['auc']:.3f} | {r['auc_physical']:.3f} | {r['rho_energy']:.2f} | "
+            f"{', '.join(f'{v:.2f}' for v in r['r2'])} | {', '.join(f'{v:.2g}' for v in r['latent_std'])} |"
+        )
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("overrides", nargs="*", help="config overrides, as for runners.train (e.g. internal_dim=8)")
+    parser.add_argument("--iters", default="0,300,1000", help="comma-separated iteration counts (default 0,300,1000)")
+    parser.add_argument("--train-steps", type=int, default=600, help="random-policy training transitions (600)")
+    parser.add_argument("--probe-steps", type=int, default=300, help="states in each probe set (300)")
+    parser.add_argument("--data-seed", type=int, default=1, help="env seed of the training data (probe sets: +1, +2)")
+    parser.add_argument("--json", help="also write the rows to this file")
+    args = parser.parse_args(argv)
+    try:
+        iters = [int(v) for v in args.iters.split(",")]
+    except ValueError:
+        iters = []
+    if not iters or min(iters) < 0 or iters != sorted(iters) or args.train_steps < 2 or args.probe_steps < 5:
+        print(f"error: --iters={args.iters} --train-steps={args.train_steps} --probe-steps={args.probe_steps}: "
+              "allowed: ascending integers >= 0, train steps >= 2, probe steps >= 5", file=sys.stderr)  # fmt: skip
+        return 2
+    try:
+        rows = study(args.overrides, iters, args.train_steps, args.probe_steps, args.data_seed)
+    except ConfigError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    print(_table(rows))
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump({"overrides": args.overrides, "train_steps": args.train_steps, "probe_steps": args.probe_steps,
+                       "data_seed": args.data_seed, "rows": rows}, fh, indent=1)  # fmt: skip
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
