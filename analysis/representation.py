@@ -3,8 +3,9 @@
 Novelty can only guide exploration if the encoder maps states the agent has not met away from those it has. This
 check trains the paper agent's world model (the config the overrides compose, as ``runners.train`` would) offline on
 one fixed random-policy dataset, and at each of ``--iters`` gradient iterations encodes two probe sets the model never
-trained on: held-out random-policy states, and states of a hand-made pumping policy
-(:mod:`curiosity.envs.directed`) that reach energies random play does not. It reports, per checkpoint:
+trained on: held-out random-policy states, and states of a policy that pushes with the motion half of the time
+(:mod:`curiosity.envs.directed`), which climbs just past the energies random play reaches: the frontier an exploring
+agent should find novel. It reports, per checkpoint:
 
 - ``auc``: how often a pumping state is more novel than a held-out random state under the run's estimator fitted to
   the training latents (0.5: novelty cannot tell them apart; 1: every pumping state is more novel);
@@ -72,8 +73,11 @@ def rollout(cfg: DictConfig, steps: int, policy: Policy, seed: int) -> Trajector
     return Trajectory(np.asarray(o), np.asarray(a), np.asarray(n), np.asarray(p))
 
 
-def pumping_policy(env_id: str) -> Policy:
-    """The directed action wherever it exists (push with the motion), the no-op (action 1) where it does not."""
+def pumping_policy(env_id: str, n_actions: int, p: float = 0.5) -> Policy:
+    """With probability ``p`` the directed action (push with the motion), else a uniform random action; uniform where
+    the state has no directed action. p = 0.5 climbs past random play's energies without leaving its neighbourhood
+    at once (Acrobot, 300 states from rest: median energy 11 J against random play's −10 J; a KDE on the physical
+    state ranks these states above held-out random ones 86 % of the time, where p = 1 gives 100 %)."""
     directed = directed_action_fn(env_id)
     if directed is None:
         raise ConfigError([f"env.id={env_id}: the representation check needs an env with a directed action; "
@@ -81,7 +85,9 @@ def pumping_policy(env_id: str) -> Policy:
 
     def policy(state: np.ndarray, rng: np.random.Generator) -> int:
         action = directed(state)
-        return 1 if action is None else action
+        if action is not None and rng.random() < p:
+            return action
+        return int(rng.integers(n_actions))
 
     return policy
 
@@ -144,13 +150,11 @@ class ProbeSets:
 
 def probe_sets(cfg: DictConfig, train_steps: int, probe_steps: int, data_seed: int) -> ProbeSets:
     """Random-policy training data (``train_steps``), ``probe_steps`` held-out random states (another seed) and
-    ``probe_steps`` pumping states (the first ``probe_steps // 5`` of the pumping run, near rest, left out)."""
+    ``probe_steps`` states of the half-directed pumping policy (a third seed), each run from ``reset``."""
     n_actions = int(cfg.env.n_actions)
     train = rollout(cfg, train_steps, random_policy(n_actions), data_seed)
     held_out = rollout(cfg, probe_steps, random_policy(n_actions), data_seed + 1)
-    skip = probe_steps // 5
-    pump = rollout(cfg, probe_steps + skip, pumping_policy(str(cfg.env.id)), data_seed + 2)
-    pump = Trajectory(*(x[skip:] for x in (pump.obs, pump.actions, pump.next_obs, pump.physical)))
+    pump = rollout(cfg, probe_steps, pumping_policy(str(cfg.env.id), n_actions), data_seed + 2)
     return ProbeSets(train, held_out, pump)
 
 
