@@ -167,3 +167,23 @@ def test_a_long_override_list_gets_a_short_unique_directory_name() -> None:
     long_b = long_a.replace("value39", "value40")
     a, b = run_variant(long_a), run_variant(long_b)
     assert len(a.encode()) <= MAX_VARIANT_BYTES and a != b and a.startswith(long_a[:100])
+
+
+def test_a_run_made_before_a_key_existed_reads_back_as_it_ran(tmp_path) -> None:
+    """``saved_config`` fills a key the run's config lacks with the value that reproduces the run (``LEGACY``), not
+    with today's default: runs made before ``pe_imagined`` existed planned with MC dropout, today's default is off."""
+    from curiosity.config.compose import LEGACY, saved_config
+
+    cfg = compose_cfg(["seed=3"])
+    now = OmegaConf.to_container(cfg)
+    del now["pe_imagined"], now["planner"]["model"], now["probe_every"]
+    (tmp_path / ".hydra").mkdir()
+    OmegaConf.save(OmegaConf.create(now), tmp_path / ".hydra" / "config.yaml")
+    old = saved_config(tmp_path)
+    assert str(cfg.pe_imagined.name) == "off" and LEGACY["pe_imagined"] == "dropout"
+    assert str(old.pe_imagined) in ("dropout", "PEImagined.dropout")
+    assert str(old.planner.model) in ("learned", "PlannerModel.learned") and old.probe_every == 0
+    assert old.seed == 3 and old.transition_dropout == cfg.transition_dropout  # saved keys are kept as saved
+    now["pe_imagined"] = "off"
+    OmegaConf.save(OmegaConf.create(now), tmp_path / ".hydra" / "config.yaml")
+    assert str(saved_config(tmp_path).pe_imagined) in ("off", "PEImagined.off")  # a saved key wins over LEGACY

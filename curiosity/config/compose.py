@@ -7,6 +7,7 @@ import functools
 import re
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 from hydra import compose, initialize_config_dir
 from hydra.core.override_parser.overrides_parser import OverridesParser
@@ -89,6 +90,20 @@ COMPOSE_ERRORS: tuple[type[Exception], ...] = (HydraException, OmegaConfBaseExce
 GROUPS = ("env", "encoder", "entropy", "estimator", "backward", "baseline", "planner", "budget")
 
 
+# Keys added after runs were made, with the value that reproduces a run made before the key existed. A key's current
+# default may differ (the agent study changed ``pe_imagined``'s default from ``dropout`` to ``off``), so a run without
+# the key takes this value, not the default.
+LEGACY: dict[str, Any] = {
+    "pe_imagined": "dropout",
+    "transition_ensemble": 1,
+    "memory_refresh_drift": 0.0,
+    "probe_every": 0,
+    "planner.model": "learned",
+    "planner.temperature_scale": "absolute",
+    "planner.sample_candidates": False,
+}
+
+
 @functools.lru_cache(maxsize=64)
 def _defaults(choices: tuple[str, ...]) -> DictConfig:
     """The composed default config of these group choices (composed once per process: composing takes ~0.1-1 s)."""
@@ -97,8 +112,8 @@ def _defaults(choices: tuple[str, ...]) -> DictConfig:
 
 def saved_config(run_dir: str | Path) -> DictConfig:
     """A run's ``.hydra/config.yaml`` over the current defaults of its group choices: a run made before a key existed
-    gets that key's default (a new key's default keeps the old behaviour, by the project's rule). When the choices no
-    longer compose (an option removed since), the saved config alone."""
+    gets the value that reproduces what it did (``LEGACY``) or, for keys not listed there, the key's default. When the
+    choices no longer compose (an option removed since), the saved config alone."""
     setup()
     saved = OmegaConf.load(Path(run_dir) / ".hydra" / "config.yaml")
     assert isinstance(saved, DictConfig)
@@ -107,7 +122,14 @@ def saved_config(run_dir: str | Path) -> DictConfig:
         base = _defaults(tuple(choices)).copy()
         OmegaConf.set_struct(base, False)
         merged = OmegaConf.merge(base, saved)
+        for key, value in LEGACY.items():
+            absent = OmegaConf.select(saved, key, default=_ABSENT) is _ABSENT
+            if absent and OmegaConf.select(base, key, default=_ABSENT) is not _ABSENT:
+                OmegaConf.update(merged, key, value, merge=False)
     except (OmegaConfBaseException, HydraException, ValueError):
         return saved
     assert isinstance(merged, DictConfig)
     return merged
+
+
+_ABSENT = object()
