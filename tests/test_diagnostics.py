@@ -143,7 +143,8 @@ FAST = ["env.renderer=fast", "progress=false", "budget=smoke", "budget.max_steps
 
 
 def test_a_run_logs_behaviour_planner_and_probe_columns(tmp_path: Path) -> None:
-    summary = run(compose_cfg(FAST), tmp_path)
+    # the paper text's stochastic prediction-error term in planning (MC dropout), so that the noise columns exist
+    summary = run(compose_cfg([*FAST, "pe_imagined=dropout", "transition_dropout=0.5"]), tmp_path)
     header = (tmp_path / "metrics.csv").read_text().splitlines()[0].split(",")
     wanted = {"behaviour/action_0", "behaviour/repeat", "behaviour/directed", "planner/first_action_entropy",
               "planner/spread/novelty", "planner/spread/pe", "planner/noise", "planner/noise_flip", "planner/p_first/2",
