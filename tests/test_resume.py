@@ -22,6 +22,7 @@ from curiosity.runtime.loop import run
 from tests.conftest import REPO, compose_cfg, run_cli
 
 ARGS = ["budget=smoke", "budget.max_steps=120", "budget.warmup_steps=40", "env.renderer=fast", "deterministic=true",
+        "planner.horizon=3",  # 27 sequences: what is tested here is resuming, not planning; keeps the suite short
         "checkpoint_every=20", "log_every=10", "seed=3"]  # fmt: skip
 
 
