@@ -35,14 +35,12 @@ from omegaconf import DictConfig
 from scipy.stats import spearmanr
 
 from curiosity.agents.paper import PaperAgent
-from curiosity.config import ConfigError, validate
+from curiosity.config import ConfigError
 from curiosity.config.build import build, choice
-from curiosity.config.compose import COMPOSE_ERRORS, compose_config, describe_compose_error
-from curiosity.config.overrides import appended_key_errors
 from curiosity.envs import make_env, physical_state
 from curiosity.envs.directed import directed_action_fn
 from curiosity.envs.energy import energy_fn
-from curiosity.runtime.preflight import task_config
+from curiosity.runtime.preflight import checked_config
 
 Policy = Callable[[np.ndarray, np.random.Generator], int]
 
@@ -122,16 +120,7 @@ def novelty_scores(cfg: DictConfig, memory: np.ndarray, queries: np.ndarray, war
 
 def study_config(overrides: Sequence[str]) -> DictConfig:
     """The run config of ``overrides``, checked as ``runners.train`` checks it; the paper's agent only."""
-    overrides = list(overrides)
-    try:
-        cfg = compose_config(overrides, hydra_node=True)
-    except COMPOSE_ERRORS as err:
-        raise ConfigError([describe_compose_error(err, overrides)]) from None
-    errors = appended_key_errors(overrides, cfg, cfg.hydra.runtime.choices)
-    if errors:
-        raise ConfigError(errors)
-    task = task_config(cfg)
-    validate(task)
+    task = checked_config(overrides)[1]
     if choice(task.baseline.name) != "none" or choice(task.env.obs) != "pixels":
         what = f"baseline={choice(task.baseline.name)} env.obs={choice(task.env.obs)}"
         raise ConfigError([f"{what}: the representation check trains the paper agent's world model from pixels; "
@@ -164,17 +153,23 @@ def _encode(agent: PaperAgent, obs: np.ndarray) -> np.ndarray:
     return torch.cat(parts).double().numpy()
 
 
-def measure(agent: PaperAgent, cfg: DictConfig, data: ProbeSets) -> dict[str, Any]:
-    """The metrics of the module docstring for the agent's current encoder."""
-    z_train, z_rand, z_pump = (_encode(agent, t.next_obs) for t in (data.train, data.random, data.pumping))
-    warmup = int(cfg.budget.warmup_steps)
-    nov = novelty_scores(cfg, z_train, np.concatenate([z_rand, z_pump]), warmup)
+def physical_auc(cfg: DictConfig, data: ProbeSets) -> float:
+    """The reference: the AUC of the run's estimator on the physical state instead of the latent (fixed per study)."""
     p_train, p_rand, p_pump = data.train.physical, data.random.physical, data.pumping.physical
-    nov_phys = novelty_scores(cfg, p_train, np.concatenate([p_rand, p_pump]), warmup)
+    nov = novelty_scores(cfg, p_train, np.concatenate([p_rand, p_pump]), int(cfg.budget.warmup_steps))
+    return auc(nov[len(p_rand) :], nov[: len(p_rand)])
+
+
+def measure(agent: PaperAgent, cfg: DictConfig, data: ProbeSets, auc_physical: float) -> dict[str, Any]:
+    """The metrics of the module docstring for the agent's current encoder (``auc_physical`` from
+    :func:`physical_auc`)."""
+    z_train, z_rand, z_pump = (_encode(agent, t.next_obs) for t in (data.train, data.random, data.pumping))
+    nov = novelty_scores(cfg, z_train, np.concatenate([z_rand, z_pump]), int(cfg.budget.warmup_steps))
+    p_train, p_rand, p_pump = data.train.physical, data.random.physical, data.pumping.physical
     energy = energy_fn(str(cfg.env.id))
     assert energy is not None  # every env with a directed action has an energy
     r = len(z_rand)
-    return {"auc": auc(nov[r:], nov[:r]), "auc_physical": auc(nov_phys[r:], nov_phys[:r]),
+    return {"auc": auc(nov[r:], nov[:r]), "auc_physical": auc_physical,
             "rho_energy": float(spearmanr(nov, energy(np.concatenate([p_rand, p_pump]))).statistic),
             "r2": [round(float(v), 3) for v in nn_r2(z_train, p_train, z_rand, p_rand)],
             "latent_std": [round(float(v), 3) for v in z_train.std(0)]}  # fmt: skip
@@ -190,13 +185,14 @@ def study(overrides: Sequence[str], iters: Sequence[int], train_steps: int = 600
     agent = PaperAgent(cfg)
     for i in range(train_steps):
         agent.replay.add(data.train.obs[i], int(data.train.actions[i]), -1.0, data.train.next_obs[i], False)
+    reference = physical_auc(cfg, data)
     out, done = [], 0
     for target in iters:
         agent.model.train()
         for _ in range(target - done):
             agent._iteration()
         done = target
-        out.append({"iters": done, **measure(agent, cfg, data)})
+        out.append({"iters": done, **measure(agent, cfg, data, reference)})
     return out
 
 

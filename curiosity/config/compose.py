@@ -104,6 +104,9 @@ LEGACY: dict[str, Any] = {
 }
 
 
+_ABSENT = object()  # OmegaConf.select's default: tells a missing key from a None value
+
+
 @functools.lru_cache(maxsize=64)
 def _defaults(choices: tuple[str, ...]) -> DictConfig:
     """The composed default config of these group choices (composed once per process: composing takes ~0.1-1 s)."""
@@ -130,6 +133,3 @@ def saved_config(run_dir: str | Path) -> DictConfig:
         return saved
     assert isinstance(merged, DictConfig)
     return merged
-
-
-_ABSENT = object()

@@ -71,13 +71,27 @@ def task_config(cfg: DictConfig) -> DictConfig:
     return task
 
 
-def _check_run(overrides: list[str]) -> None:
+def checked_config(overrides: Sequence[str]) -> tuple[DictConfig, DictConfig]:
+    """Compose ``overrides`` as one run and check them as ``runners.train`` does before anything is written.
+
+    Returns:
+        The composed config with Hydra's node, and the task config (without it).
+
+    Raises:
+        ConfigError: the overrides do not compose, append an unknown key, or give an invalid config.
+    """
+    overrides = list(overrides)
     cfg = _compose(overrides)
     errors = appended_key_errors(overrides, cfg, cfg.hydra.runtime.choices)
     if errors:
         raise ConfigError(errors)
     task = task_config(cfg)
     validate(task)
+    return cfg, task
+
+
+def _check_run(overrides: list[str]) -> None:
+    cfg, task = checked_config(overrides)
     check_run_dir(task, _directory(cfg, "hydra.run.dir"))
 
 
