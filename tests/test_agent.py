@@ -153,3 +153,32 @@ def test_refresh_takes_the_random_phase_reference_from_the_memory() -> None:
         expected = cur.embed(model.encode(replay.obs_at(np.arange(4))), replay.actions_at(np.arange(4)))
     torch.testing.assert_close(cur.estimator.reward.reference, expected)  # the first 4 transitions, re-encoded
     torch.testing.assert_close(cur.memory.tensor()[:4], expected)
+
+
+def test_each_observation_is_encoded_once_per_encoder_state() -> None:
+    """The plan's z_t is the memory's z_t: without training in between, one encoder pass per env step (o_{t+1});
+    with training after every step, two (act must encode o_{t+1} with the changed encoder). A reused latent equals a
+    fresh one exactly (same batch of one, same weights, same machine)."""
+    from curiosity.envs import make_env
+
+    for iters, passes in ((0, 1), (1, 2)):
+        cfg = compose_cfg(["env.renderer=fast", "budget=smoke", "budget.warmup_steps=4", f"budget.iters_per_train={iters}",
+                           "batch_size=4", "planner.horizon=2", "probe_every=0"])  # fmt: skip
+        agent = PaperAgent(cfg)
+        env = make_env(cfg.env, 100)
+        obs, _ = env.reset(seed=0)
+        calls: list[int] = []
+        agent.model.encoder.register_forward_hook(lambda m, inp, out: calls.append(inp[0].shape[0]))
+        per_step = []
+        for step in range(12):
+            before = len(calls)
+            action = agent.act(obs, step) if step >= 4 else step % 3
+            nxt, r, term, _, _ = env.step(action)
+            agent.observe(obs, action, float(r), nxt, bool(term), step)
+            per_step.append(sum(1 for c in calls[before:] if c == 1))
+            obs = nxt
+        assert per_step[1:4] == [1, 1, 1]  # warm-up: o_t was encoded as the previous step's o_{t+1}
+        assert per_step[6:] == [passes] * 6, (iters, per_step)
+        with agent.model.evaluating():
+            fresh = agent.model.encode(torch.as_tensor(obs).unsqueeze(0))[0]
+        assert torch.equal(agent.encode_obs(obs), fresh)

@@ -36,6 +36,31 @@ def test_conv_encoder_layout_does_not_change_the_function():
     assert all(p.grad is not None for p in nhwc.parameters())
 
 
+def nsrs_order(enc: ConvEncoder) -> torch.nn.Module:
+    """The same layers in NSRS's order: conv tanh conv tanh pool conv tanh pool flatten, then the head."""
+    f = enc.features
+    return torch.nn.Sequential(f[0], f[1], f[2], f[4], f[3], f[5], f[7], f[6], f[8], enc.head)
+
+
+def test_conv_encoder_pooling_before_tanh_is_nsrs_function_and_gradient():
+    # our encoder max-pools before each tanh for speed; tanh is increasing, so the function and the gradient are
+    # NSRS's (tolerances: the same float ops in another order, any BLAS)
+    torch.manual_seed(0)
+    for channels_last in (True, False):
+        enc = ConvEncoder(channels_last=channels_last)
+        ref = nsrs_order(enc)
+        assert [type(m).__name__ for m in ref] == ["Conv2d", "Tanh", "Conv2d", "Tanh", "MaxPool2d", "Conv2d", "Tanh",
+                                                   "MaxPool2d", "Flatten", "Linear"]  # fmt: skip
+        x = torch.randn(16, 4, 32, 32)
+        ours = enc(x)
+        theirs = ref(x.contiguous(memory_format=torch.channels_last) if channels_last else x)
+        torch.testing.assert_close(ours, theirs, rtol=1e-5, atol=1e-6)
+        g_ours = torch.autograd.grad(ours.square().sum(), list(enc.parameters()))
+        g_theirs = torch.autograd.grad(theirs.square().sum(), list(enc.parameters()))
+        for a, b in zip(g_ours, g_theirs, strict=True):
+            torch.testing.assert_close(a, b, rtol=1e-4, atol=1e-6)
+
+
 def test_mlp_encoder_shape_and_layers():
     enc = MLPEncoder(in_dim=6, latent_dim=2)
     widths = [m.out_features for m in enc.modules() if isinstance(m, torch.nn.Linear)]

@@ -105,6 +105,7 @@ class PaperAgent(Agent):
         self.env: Any = None
         self.simulator: Simulator | None = None
         self.totals: dict[str, list[float]] = {}  # key -> [sum, count] of SUMMARY_KEYS
+        self._latent: tuple[np.ndarray, torch.Tensor] | None = None  # the last observation encoded, until training
 
     def attach_env(self, env: Any) -> None:
         """Keep the run's env when the oracle planner or the probe branch its simulator."""
@@ -125,6 +126,21 @@ class PaperAgent(Agent):
                 total[1] += 1
 
     # ------------------------------------------------------------------ acting
+    def encode_obs(self, obs: np.ndarray) -> torch.Tensor:
+        """z = E(o) for one observation (*obs_shape) -> (d,), in eval mode without gradient; ``check_finite``.
+
+        Each observation is encoded once per encoder state: the plan's z_t is the memory's z_t, and o_{t+1}, encoded
+        by ``observe`` for the intrinsic reward, is reused by the next ``act`` unless training changed the encoder in
+        between. Always a batch of one, so a reused latent equals a recomputed one exactly.
+        """
+        if self._latent is not None and np.array_equal(self._latent[0], obs):
+            return self._latent[1]
+        with self.model.evaluating():
+            z = self.model.encode(torch.as_tensor(obs).unsqueeze(0))[0]
+        check_finite("latent", z)
+        self._latent = (np.array(obs, copy=True), z)
+        return z
+
     def _reward_fn(self) -> Any:
         return self.model.reward if self.model.reward_model is not None else None
 
@@ -168,9 +184,8 @@ class PaperAgent(Agent):
 
     def act(self, obs: np.ndarray, step: int) -> int:
         start = time.perf_counter()
+        z0 = self.encode_obs(obs)
         with self.model.evaluating():
-            z0 = self.model.encode(torch.as_tensor(obs).unsqueeze(0))[0]
-            check_finite("latent", z0)
             action, info = self._plan(z0, obs)
             plan_ms = 1e3 * (time.perf_counter() - start)
             logs = {"planner/score": info.get("chosen_score", info.get("best_value", 0.0)),
@@ -188,9 +203,8 @@ class PaperAgent(Agent):
     def observe(self, obs: np.ndarray, action: int, reward: float, next_obs: np.ndarray, terminated: bool,
                 step: int) -> dict[str, float]:  # fmt: skip
         self.replay.add(obs, action, reward, next_obs, terminated)
-        with self.model.evaluating():
-            z = self.model.encode(torch.as_tensor(np.stack([obs, next_obs])))
-        check_finite("latent", z)
+        z_t = self.encode_obs(obs)
+        z = torch.stack([z_t, self.encode_obs(next_obs)])
         cur, a = self.curiosity, torch.tensor([action])
         cur.add(z[0], action, self.replay.total_added - 1)
         logs: dict[str, float] = dict(self._plan_logs)
@@ -233,6 +247,7 @@ class PaperAgent(Agent):
         sums: dict[str, float] = {}
         window: list[float] = []
         done = 0
+        self._latent = None  # the encoder changes
         self.model.train()
         for done in range(1, iterations + 1):
             logs, eval_error = self._iteration()
@@ -280,6 +295,7 @@ class PaperAgent(Agent):
         }  # fmt: skip
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
+        self._latent = None
         self.model.load_state_dict(state["model"])
         if self.q is not None:
             self.q.load_state_dict(state["q"])
