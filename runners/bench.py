@@ -1,10 +1,11 @@
-"""Speed benchmark: ``python -m runners.bench [--threads 1] [--memory 1000 3000] [--out bench.json]``.
+"""Speed benchmark: ``python -m runners.bench [--quick] [--json FILE]``.
 
-Measures, on this machine, with the real components and configs:
-- env steps per second for each observation pipeline (random actions);
-- ms per training iteration of the paper's agent (default config, and the ``paper_code`` preset);
-- ms per planning step (MPC and Q-tree) and ms per memory refresh, at several memory sizes;
-and prints a Markdown table with the machine description. Speed targets are checked here, never in tests.
+Measures on this machine, with the real components and configs (speed targets are checked here, never in tests):
+env steps per second per observation pipeline; ms per training iteration of the default agent per batch size and
+its speed-up over another commit measured side by side (``--baseline-commit``); ms per planning step and per memory
+refresh and the error of log ρ against exact KDE at memory sizes N; the speed-up of a 4-job sweep with two joblib
+workers over one; and whole seeds of the default agent alone: wall time, steps-to-goal and wall share by part.
+Prints Markdown tables with the machine description. ``--quick`` (under 3 minutes) shrinks every measurement.
 """
 
 from __future__ import annotations
@@ -12,121 +13,104 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
-import statistics
-import time
-from collections.abc import Callable, Sequence
+import tempfile
+from pathlib import Path
+from typing import Any
 
-import numpy as np
 import torch
 
-from curiosity.config import build, setup
-from curiosity.config.compose import compose_config
-from curiosity.envs import make_env
-from curiosity.runtime.seeding import seed_everything
+from curiosity.config import setup
+from runners.benchmark.baseline import speedup_vs
+from runners.benchmark.components import env_steps_per_s, planning_at, train_iter_ms
+from runners.benchmark.runs import seed_runs, sweep_speedup
+from runners.benchmark.timing import machine
 
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 
-
-def machine() -> dict[str, str | int]:
-    cpu = platform.processor() or "unknown"
-    try:
-        with open("/proc/cpuinfo") as f:
-            cpu = next(line.split(":", 1)[1].strip() for line in f if line.startswith("model name"))
-    except (OSError, StopIteration):
-        pass
-    return {"cpu": cpu, "cores": os.cpu_count() or 0, "python": platform.python_version(), "torch": torch.__version__,
-            "torch_threads": torch.get_num_threads(), "platform": platform.platform()}  # fmt: skip
+BASELINE_COMMIT = "127d633"  # the code before the speed work of issue 13
+QUICK_RUN = ["budget=smoke", "budget.max_steps=80"]
 
 
-def timed(fn: Callable[[], object], repeats: int, warmup: int = 2) -> float:
-    """Median milliseconds of ``fn()`` over ``repeats`` calls after ``warmup`` calls."""
-    for _ in range(warmup):
-        fn()
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        times.append(1e3 * (time.perf_counter() - start))
-    return statistics.median(times)
+def parse(argv: list[str] | None = None) -> argparse.Namespace:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--quick", action="store_true", help="small sizes, one round, one short seed (< 3 minutes)")
+    p.add_argument("--threads", type=int, default=1, help="torch intra-op threads")
+    p.add_argument("--batches", type=int, nargs="+", help="training batch sizes (default 32 64 128; quick: 64)")
+    p.add_argument("--memory", type=int, nargs="+", help="memory sizes N (default 1000 10000 100000; quick: 1000)")
+    p.add_argument("--repeats", type=int, help="timed calls per median (default 20; quick: 8)")
+    p.add_argument("--baseline-commit", default=BASELINE_COMMIT, help="commit to time the training iteration against")
+    p.add_argument("--seeds", type=int, nargs="*", help="seeds of the default agent to run alone (default 100-103)")
+    p.add_argument("--seed-dir", help="where the seed runs go (default: a temporary directory); re-running resumes")
+    p.add_argument("--json", "--out", dest="json", help="also write the results as JSON here")
+    args = p.parse_args(argv)
+    args.batches = args.batches or ([64] if args.quick else [32, 64, 128])
+    args.memory = args.memory or ([1000] if args.quick else [1000, 10_000, 100_000])
+    args.repeats = args.repeats or (8 if args.quick else 20)
+    args.seeds = args.seeds if args.seeds is not None else ([100] if args.quick else [100, 101, 102, 103])
+    return args
 
 
-def bench_env(env_name: str, obs: str, renderer: str, steps: int = 400) -> float:
-    """Env steps per second with random actions."""
-    cfg = compose_config([f"env={env_name}", f"env.obs={obs}", f"env.renderer={renderer}"])
-    env = make_env(cfg.env, 10_000)
-    env.reset(seed=0)
-    rng = np.random.default_rng(0)
-    start = time.perf_counter()
-    for _ in range(steps):
-        env.step(int(rng.integers(3)))
-    env.close()
-    return steps / (time.perf_counter() - start)
+def measure(args: argparse.Namespace, seed_dir: Path) -> dict[str, Any]:
+    default_batch = 64
+    res: dict[str, Any] = {"machine": machine(), "quick": args.quick}
+    res["env_steps_per_s"] = {p: round(env_steps_per_s("acrobot", p, 150 if args.quick else 400), 1)
+                              for p in ("gym", "fast", "state")}  # fmt: skip
+    res["train_iter_ms"] = train_iter_ms(args.batches, args.repeats)
+    base = speedup_vs(args.baseline_commit, default_batch, args.repeats, args.threads, rounds=1 if args.quick else 2)
+    res["train_iter_baseline"] = base
+    res["train_iter_speedup_vs_baseline"] = base["speedup"]
+    at = {n: planning_at(n, args.repeats) for n in args.memory}
+    res["plan_step_ms"] = {n: v["plan_ms"] for n, v in at.items()}
+    res["refresh_ms"] = {n: v["refresh_ms"] for n, v in at.items()}
+    res["novelty_log_rho_error"] = {n: {"median": v["log_rho_error_median"], "p99": v["log_rho_error_p99"]}
+                                    for n, v in at.items()}  # fmt: skip
+    sweep = ["budget=smoke", "budget.max_steps=70"] if args.quick else ["budget=smoke"]
+    res["sweep"] = sweep_speedup(sweep)
+    res["sweep_speedup_2_jobs"] = res["sweep"]["speedup"]
+    seeds = seed_runs(args.seeds, QUICK_RUN if args.quick else [], seed_dir)
+    res["seeds"] = seeds
+    res["seed_wall_s"] = [r["wall_s"] for r in seeds]
+    res["seed_steps_to_goal"] = [r["steps_to_goal"] for r in seeds]
+    totals: dict[str, float] = {}
+    for r in seeds:  # wall share over all seeds, weighted by each seed's wall time
+        for part, share in r["wall_share"].items():
+            totals[part] = totals.get(part, 0.0) + share * r["wall_s"]
+    wall = sum(r["wall_s"] for r in seeds if r["wall_share"]) or 1.0
+    res["wall_share"] = {part: t / wall for part, t in totals.items()}
+    return res
 
 
-def filled_agent(overrides: Sequence[str], memory: int):
-    """The paper's agent after ``memory`` random env steps (fast renderer), its memory refreshed."""
-    cfg = compose_config(["env.renderer=fast", f"budget.warmup_steps={min(64, memory)}", *overrides])
-    seed_everything(0, threads=torch.get_num_threads())
-    env = make_env(cfg.env, memory + 10)
-    agent = build(cfg.baseline, cfg=cfg)
-    obs, _ = env.reset(seed=0)
-    rng = np.random.default_rng(0)
-    for step in range(memory):
-        action = int(rng.integers(3))
-        nxt, r, term, _, _ = env.step(action)
-        agent.replay.add(obs, action, r, nxt, term)
-        with agent.model.evaluating():
-            z = agent.model.encode(torch.as_tensor(obs).unsqueeze(0))[0]
-        agent.curiosity.add(z, action, step)
-        obs = nxt
-    agent.curiosity.refresh()
-    return agent, obs
+def report(res: dict[str, Any]) -> str:
+    lines = [f"machine: {json.dumps(res['machine'])}" + ("  (quick)" if res["quick"] else ""), "",
+             "| Acrobot pipeline | env steps/s |", "|---|---|"]  # fmt: skip
+    lines += [f"| {k} | {v:,.0f} |" for k, v in res["env_steps_per_s"].items()]
+    b = res["train_iter_baseline"]
+    lines += ["", "| batch | ms per training iteration |", "|---|---|"]
+    lines += [f"| {k} | {v:.1f} |" for k, v in res["train_iter_ms"].items()]
+    lines += ["", f"training iteration at batch {b['batch']}: {b['ms']:.1f} ms here, {b['baseline_ms']:.1f} ms at "
+              f"{b['commit']} (side by side): speed-up {b['speedup']:.2f}x"]  # fmt: skip
+    lines += ["", "| memory N | ms per planning step | ms per refresh | log rho error median / p99 |", "|---|---|---|---|"]
+    for n, ms in res["plan_step_ms"].items():
+        e = res["novelty_log_rho_error"][n]
+        lines.append(f"| {n:,} | {ms:.1f} | {res['refresh_ms'][n]:.1f} | {e['median']:.2g} / {e['p99']:.2g} |")
+    s = res["sweep"]
+    lines += ["", f"{s['jobs']}-job sweep: {s['one_job_s']:.1f} s with 1 worker, {s['two_jobs_s']:.1f} s with 2: "
+              f"speed-up {s['speedup']:.2f}x"]  # fmt: skip
+    lines += ["", "| seed | steps to goal | wall s |", "|---|---|---|"]
+    lines += [f"| {r['seed']} | {r['steps_to_goal']} | {r['wall_s']:.0f} |" for r in res["seeds"]]
+    lines += ["", "wall share: " + ", ".join(f"{k} {v:.1%}" for k, v in res["wall_share"].items())]
+    return "\n".join(lines)
 
 
-def bench_agent(name: str, overrides: Sequence[str], memories: Sequence[int], repeats: int) -> list[dict]:
-    rows = []
-    for memory in memories:
-        agent, obs = filled_agent(overrides, memory)
-        row = {"agent": name, "memory": memory}
-        row["train_iteration_ms"] = timed(agent._iteration, repeats)
-        row["plan_ms"] = timed(lambda a=agent, o=obs: a.act(o, 0), repeats)
-        row["refresh_ms"] = timed(agent.curiosity.refresh, max(3, repeats // 4), warmup=1)
-        rows.append(row)
-    return rows
-
-
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--threads", type=int, default=1, help="torch intra-op threads")
-    parser.add_argument("--memory", type=int, nargs="+", default=[500, 1500, 3000], help="memory sizes to plan against")
-    parser.add_argument("--repeats", type=int, default=20)
-    parser.add_argument("--out", help="also write the results as JSON here")
-    args = parser.parse_args()
+def main(argv: list[str] | None = None) -> None:
+    args = parse(argv)
     setup()
     torch.set_num_threads(args.threads)
-    result: dict = {"machine": machine(), "env_steps_per_s": {}, "agents": []}
-    for env_name in ("acrobot", "mountaincar"):
-        for obs, renderer in (("pixels", "gym"), ("pixels", "fast"), ("state", "gym")):
-            key = f"{env_name}/{obs}/{renderer if obs == 'pixels' else '-'}"
-            result["env_steps_per_s"][key] = round(bench_env(env_name, obs, renderer), 1)
-    agents = {
-        "paper_text (default: mpc, kde, gaussian_potential)": [],
-        "paper_text, horizon 5": ["planner.horizon=5"],
-        "paper_code (qtree depth 5, renyi_mi, kde zscore)": ["+experiment=paper_code"],
-    }
-    for name, overrides in agents.items():
-        result["agents"] += bench_agent(name, overrides, args.memory, args.repeats)
-    print(f"machine: {json.dumps(result['machine'])}")
-    print("\n| pipeline | env steps/s |\n|---|---|")
-    for key, value in result["env_steps_per_s"].items():
-        print(f"| {key} | {value:.0f} |")
-    print("\n| agent | memory | train iteration ms | plan ms | refresh ms |\n|---|---|---|---|---|")
-    for r in result["agents"]:
-        print(f"| {r['agent']} | {r['memory']} | {r['train_iteration_ms']:.1f} | {r['plan_ms']:.1f} | {r['refresh_ms']:.1f} |")
-    if args.out:
-        with open(args.out, "w") as f:
-            json.dump(result, f, indent=2)
+    with tempfile.TemporaryDirectory() as tmp:
+        res = measure(args, Path(args.seed_dir or tmp))
+    print(report(res))
+    if args.json:
+        Path(args.json).write_text(json.dumps(res, indent=2))
 
 
 if __name__ == "__main__":

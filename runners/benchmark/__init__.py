@@ -1,0 +1,1 @@
+"""Parts of ``python -m runners.bench``: what is measured (components, another commit, sweeps, whole seeds)."""

@@ -1,0 +1,73 @@
+"""Training-iteration speed of another commit, measured side by side with this tree (``--baseline-commit``).
+
+Both trees run the same small script in a fresh process (the commit's own code, through a temporary ``git worktree``),
+alternately, so a change of machine load hits both; the speed-up is the ratio of the medians over rounds.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[2]
+
+# uses only APIs every commit of the project has had: compose_config, build, make_env, replay.add, agent._iteration
+SCRIPT = """
+import json, sys, time, statistics
+import numpy as np, torch
+from curiosity.config import build
+from curiosity.config.compose import compose_config
+from curiosity.envs import make_env
+batch, repeats, threads = (int(v) for v in sys.argv[1:4])
+torch.set_num_threads(threads)
+torch.manual_seed(0)
+cfg = compose_config(["env.renderer=fast", f"batch_size={batch}"])
+env = make_env(cfg.env, 1000)
+agent = build(cfg.baseline, cfg=cfg)
+obs, _ = env.reset(seed=0)
+rng = np.random.default_rng(0)
+for _ in range(500):
+    a = int(rng.integers(3))
+    nxt, r, term, _, _ = env.step(a)
+    agent.replay.add(obs, a, r, nxt, term)
+    obs = nxt
+agent.model.train()
+times = []
+for i in range(repeats + 2):
+    start = time.perf_counter()
+    agent._iteration()
+    if i >= 2:
+        times.append(1e3 * (time.perf_counter() - start))
+print(json.dumps(statistics.median(times)))
+"""
+
+
+def _iteration_ms(tree: Path, batch: int, repeats: int, threads: int) -> float:
+    env = {**os.environ, "PYTHONPATH": str(tree), "OMP_NUM_THREADS": str(threads), "SDL_VIDEODRIVER": "dummy"}
+    done = subprocess.run([sys.executable, "-c", SCRIPT, str(batch), str(repeats), str(threads)], cwd=tree, env=env,
+                          capture_output=True, text=True, check=False)  # fmt: skip
+    if done.returncode:
+        raise RuntimeError(f"timing the training iteration in {tree} failed:\n{done.stderr[-2000:]}")
+    return float(json.loads(done.stdout.strip().splitlines()[-1]))
+
+
+def speedup_vs(commit: str, batch: int, repeats: int, threads: int, rounds: int = 2) -> dict[str, float | str]:
+    """ms per training iteration at ``batch`` here and at ``commit``, alternating ``rounds`` times; their ratio."""
+    with tempfile.TemporaryDirectory() as tmp:
+        tree = Path(tmp) / "baseline"
+        subprocess.run(["git", "worktree", "add", "--detach", str(tree), commit], cwd=REPO, check=True,
+                       capture_output=True)  # fmt: skip
+        try:
+            ours, theirs = [], []
+            for _ in range(rounds):
+                theirs.append(_iteration_ms(tree, batch, repeats, threads))
+                ours.append(_iteration_ms(REPO, batch, repeats, threads))
+        finally:
+            subprocess.run(["git", "worktree", "remove", "--force", str(tree)], cwd=REPO, check=False, capture_output=True)
+    here, there = statistics.median(ours), statistics.median(theirs)
+    return {"commit": commit, "batch": batch, "ms": here, "baseline_ms": there, "speedup": there / here}

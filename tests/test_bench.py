@@ -1,0 +1,97 @@
+"""The benchmark's parts run and account for time correctly (no timing assertions: speeds are the benchmark's job)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+import runners.benchmark.timing as timing
+from runners.bench import parse, report
+from runners.benchmark.components import planning_at
+from runners.benchmark.runs import seed_runs
+from runners.benchmark.timing import PartTimer
+
+
+class Clock:
+    def __init__(self) -> None:
+        self.now = 0.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+class Work:
+    def __init__(self, clock: Clock) -> None:
+        self.clock = clock
+
+    def inner(self) -> None:
+        self.clock.now += 2.0
+
+    def outer(self) -> None:
+        self.clock.now += 1.0
+        self.inner()
+        self.clock.now += 3.0
+
+
+def test_part_timer_charges_nested_parts_exclusively_and_restores(monkeypatch: pytest.MonkeyPatch) -> None:
+    clock = Clock()
+    monkeypatch.setattr(timing.time, "perf_counter", clock)
+    work = Work(clock)
+    timer = PartTimer()
+    timer.wrap(work, "inner", "in")
+    timer.wrap(work, "outer", "out")
+    work.outer()
+    work.inner()
+    assert timer.seconds == {"out": 4.0, "in": 4.0}
+    assert timer.shares(10.0) == {"in": 0.4, "out": 0.4, "other": pytest.approx(0.2)}
+    timer.restore()
+    work.outer()
+    assert timer.seconds == {"out": 4.0, "in": 4.0}
+
+
+def test_planning_at_a_small_memory_reports_exact_kde_as_exact() -> None:
+    out = planning_at(80, repeats=1, queries=64)
+    assert out["plan_ms"] > 0 and out["refresh_ms"] > 0
+    assert out["log_rho_error_median"] < 1e-4 and out["log_rho_error_p99"] < 1e-4  # the default estimator is exact
+
+
+def test_seed_runs_time_every_part_and_read_the_summary(tmp_path: Path) -> None:
+    rows = seed_runs([3], ["budget=smoke", "budget.max_steps=70", "env.renderer=fast", "probe_every=0"], tmp_path)
+    (row,) = rows
+    summary = json.loads((tmp_path / "seed=3" / "summary.json").read_text())
+    assert row["wall_s"] == summary["wall_seconds"] and row["steps_to_goal"] == summary["steps_to_goal"]
+    shares = row["wall_share"]
+    assert {"env+render", "encode", "plan", "novelty", "refresh", "train", "logging", "checkpoint"} <= set(shares)
+    assert all(v >= 0 for v in shares.values()) and sum(shares.values()) == pytest.approx(1.0, abs=0.02)
+    # instrumentation removed afterwards: a second run is not timed into the first's parts
+    import curiosity.runtime.loop as loop
+    from curiosity.envs import make_env
+
+    assert loop.make_env is make_env
+
+
+def test_parse_defaults_and_report_render() -> None:
+    quick, full = parse(["--quick"]), parse([])
+    assert (quick.batches, quick.memory, quick.seeds) == ([64], [1000], [100])
+    assert (full.batches, full.memory, full.seeds) == ([32, 64, 128], [1000, 10_000, 100_000], [100, 101, 102, 103])
+    res = {"machine": {"cpu": "x"}, "quick": True, "env_steps_per_s": {"gym": 1.0, "fast": 2.0, "state": 3.0},
+           "train_iter_ms": {64: 10.0}, "train_iter_baseline": {"batch": 64, "ms": 10.0, "baseline_ms": 25.0,
+                                                                  "commit": "abc", "speedup": 2.5},
+           "plan_step_ms": {1000: 3.0}, "refresh_ms": {1000: 5.0}, "novelty_log_rho_error": {1000: {"median": 0.0, "p99": 0.0}},
+           "sweep": {"jobs": 4, "one_job_s": 10.0, "two_jobs_s": 5.5, "speedup": 1.82},
+           "seeds": [{"seed": 100, "steps_to_goal": 200, "wall_s": 100.0}], "wall_share": {"train": 0.5, "other": 0.5}}  # fmt: skip
+    text = report(res)
+    assert "speed-up 2.50x" in text and "| 100 | 200 | 100 |" in text and "train 50.0%" in text
+
+
+def test_baseline_commit_is_timed_from_its_own_worktree_and_removed() -> None:
+    import subprocess
+
+    from runners.benchmark.baseline import REPO, speedup_vs
+
+    before = subprocess.run(["git", "worktree", "list"], cwd=REPO, capture_output=True, text=True).stdout
+    out = speedup_vs("HEAD", batch=4, repeats=1, threads=1, rounds=1)
+    assert out["ms"] > 0 and out["baseline_ms"] > 0 and out["speedup"] == out["baseline_ms"] / out["ms"]
+    assert subprocess.run(["git", "worktree", "list"], cwd=REPO, capture_output=True, text=True).stdout == before
