@@ -57,6 +57,10 @@ class SegmentBatch:
         """n, the number of transitions per segment."""
         return int(self.act.shape[1])
 
+    def to(self, device: torch.device | str) -> SegmentBatch:
+        """The same segments on ``device`` (no copy when already there)."""
+        return SegmentBatch(*(t.to(device) for t in (self.obs, self.act, self.rewards, self.terminateds)))
+
     def first_step(self) -> TransitionBatch:
         """The first transition of every segment as a :class:`TransitionBatch`."""
         return TransitionBatch(self.obs[:, 0], self.act[:, 0], self.obs[:, 1], self.rewards[:, 0], self.terminateds[:, 0])

@@ -101,12 +101,13 @@ class LatentCuriosity(IntrinsicReward):
     def _encode_stored(self, keys: np.ndarray) -> Tensor:
         """Latents of stored transitions' o_t by global index, with the current encoder: (M,) -> (M, d)."""
         with self.model.evaluating():
-            parts = [self.model.encode(self.replay.obs_at(keys[i : i + 512])) for i in range(0, len(keys), 512)]
+            device = next(self.model.parameters()).device
+            parts = [self.model.encode(self.replay.obs_at(keys[i : i + 512]).to(device)) for i in range(0, len(keys), 512)]
         return torch.cat(parts)
 
     def add(self, z: Tensor, a: int, index: int) -> None:
         """Store the embedding of the pair (s_t, a_t) of transition ``index`` (z: (d,) latent of o_t)."""
-        self.memory.add(self.embed(z.unsqueeze(0), torch.tensor([a])), keys=torch.tensor([index]))
+        self.memory.add(self.embed(z.unsqueeze(0), torch.tensor([a], device=z.device)), keys=torch.tensor([index], device="cpu"))
         if self.ready:
             self.estimator.set_memory(self.memory.tensor())
 
@@ -117,7 +118,7 @@ class LatentCuriosity(IntrinsicReward):
         z = self._encode_stored(keys)
         if self.standardise:
             self.z_mean, self.z_std = z.mean(0), z.std(0, correction=0).clamp_min(1e-8)
-        self.memory.replace(self.embed(z, self.replay.actions_at(keys)))
+        self.memory.replace(self.embed(z, self.replay.actions_at(keys).to(z.device)))
         ref_keys = np.arange(min(self.warmup_steps, self.replay.total_added))
         reference = None
         if len(ref_keys) > 1:
@@ -126,7 +127,7 @@ class LatentCuriosity(IntrinsicReward):
                 z_ref = z[[row[int(k)] for k in ref_keys]]
             else:  # a reservoir may have dropped some of it
                 z_ref = self._encode_stored(ref_keys)
-            reference = self.embed(z_ref, self.replay.actions_at(ref_keys))
+            reference = self.embed(z_ref, self.replay.actions_at(ref_keys).to(z.device))
         self.estimator.fit(self.memory.tensor(), reference)
         self.ready = True
 
@@ -135,7 +136,7 @@ class LatentCuriosity(IntrinsicReward):
         """How far the memory has gone stale: the median distance, in standardised latent units, between up to ``rows``
         memory rows (evenly spaced) and the embedding the current encoder gives their observations."""
         keys = self.memory.keys()
-        index = torch.linspace(0, len(keys) - 1, min(rows, len(keys))).round().long()
+        index = torch.linspace(0, len(keys) - 1, min(rows, len(keys)), device="cpu").round().long()
         now = self._std(self._encode_stored(keys[index].numpy()))
         stored = self.memory.tensor()[index, : now.shape[1]]
         return float((now - stored).norm(dim=1).median())

@@ -29,6 +29,7 @@ from curiosity.novelty.memory import EmbeddingMemory
 from curiosity.planning.probe import probe_keys, probe_model
 from curiosity.planning.rollout import SimulatorRollout
 from curiosity.replay import ReplayBuffer
+from curiosity.runtime.device import resolve_device, to_device
 
 AGENT_KEYS = ("intrinsic/reward", "losses/q", "train/iterations", "planner/score", "planner/entropy",
               "planner/first_action_entropy", "planner/spread/score", "planner/spread/novelty", "planner/spread/pe",
@@ -70,7 +71,8 @@ class PaperAgent(Agent):
         self.cfg, self.label = cfg, str(cfg.method_label)
         self.n_actions = int(cfg.env.n_actions)
         self.obs_pixels = choice(cfg.env.obs) == "pixels"
-        self.model = build_world_model(cfg)
+        self.device = resolve_device(choice(OmegaConf.select(cfg, "device", default="cpu")))
+        self.model = build_world_model(cfg).to(self.device)
         self.regulariser = build(cfg.entropy)
         self.weights = LossWeights(transition=cfg.transition_coef, reward=cfg.reward_coef, backward=cfg.backward.coef,
                                    sigma_b=cfg.backward.sigma_b, normalised_transition=cfg.normalised_transition,
@@ -79,6 +81,8 @@ class PaperAgent(Agent):
         self.q = (QLearner(self.model.encoder, cfg.internal_dim, self.n_actions, gamma=cfg.planner.gamma,
                            target_every=cfg.q_target_every, huber=cfg.q_huber)
                   if getattr(self.planner, "uses_q", False) else None)  # fmt: skip
+        if self.q is not None:
+            self.q.to(self.device)
         params = list(self.model.parameters()) + (list(self.q.q.parameters()) if self.q else [])
         self.optimizer = build(cfg.optimizer, params=params)
         self.replay = ReplayBuffer(cfg.replay_capacity, obs_shape_of(cfg.env), pixel_uint8=self.obs_pixels)
@@ -136,7 +140,7 @@ class PaperAgent(Agent):
         if self._latent is not None and np.array_equal(self._latent[0], obs):
             return self._latent[1]
         with self.model.evaluating():
-            z = self.model.encode(torch.as_tensor(obs).unsqueeze(0))[0]
+            z = self.model.encode(torch.as_tensor(obs, device=self.device).unsqueeze(0))[0]
         check_finite("latent", z)
         self._latent = (np.array(obs, copy=True), z)
         return z
@@ -205,7 +209,7 @@ class PaperAgent(Agent):
         self.replay.add(obs, action, reward, next_obs, terminated)
         z_t = self.encode_obs(obs)
         z = torch.stack([z_t, self.encode_obs(next_obs)])
-        cur, a = self.curiosity, torch.tensor([action])
+        cur, a = self.curiosity, torch.tensor([action], device=self.device)
         cur.add(z[0], action, self.replay.total_added - 1)
         logs: dict[str, float] = dict(self._plan_logs)
         self._plan_logs = {}
@@ -263,7 +267,7 @@ class PaperAgent(Agent):
         return out
 
     def _iteration(self) -> tuple[dict[str, float], float]:
-        seg = self.replay.sample_segments(self.cfg.batch_size, self.cfg.n_step, self.rng)
+        seg = self.replay.sample_segments(self.cfg.batch_size, self.cfg.n_step, self.rng).to(self.device)
         enc = encode_segments(self.model, seg)
         loss, logs = representation_loss(self.model, seg, enc, self.regulariser, self.weights)
         if self.q is not None:
@@ -301,7 +305,7 @@ class PaperAgent(Agent):
             self.q.load_state_dict(state["q"])
         self.optimizer.load_state_dict(state["optimizer"])
         self.replay.load_state_dict(state["replay"])
-        self.curiosity.load_state_dict(state["curiosity"])
+        self.curiosity.load_state_dict(to_device(state["curiosity"], self.device))
         self.schedule.load_state_dict(state["schedule"])
         self.rng.bit_generator.state = state["rng"]
         self.generator.set_state(state["generator"])

@@ -31,6 +31,12 @@ class Kernel(Enum):
     yu = "yu"
 
 
+class Device(Enum):
+    auto = "auto"
+    cpu = "cpu"
+    cuda = "cuda"
+
+
 class NoveltyInput(Enum):
     state_action = "state_action"
     state = "state"
@@ -254,6 +260,7 @@ class Config:
     seed: int = 0
     deterministic: bool = False
     threads: int = 1
+    device: Device = Device.cpu  # where networks, batches, novelty memory and planning live
     log_every: int = 10
     progress: bool = True
     resume: bool = True  # re-running the same command on an existing run directory resumes its checkpoint

@@ -93,6 +93,7 @@ RULES: list[Rule] = [
 # The observations each encoder takes, and the largest tree a tree planner may expand at every env step.
 ENCODER_OBS = {"conv": "pixels", "mlp": "state"}
 MAX_TREE_LEAVES = 3**10
+CPU_ONLY_BASELINES = ("icm", "rnd")  # the Q agent's intrinsic rewards keep their networks on the CPU
 
 
 def _cross_field_errors(cfg: DictConfig) -> list[str]:
@@ -107,6 +108,15 @@ def _cross_field_errors(cfg: DictConfig) -> list[str]:
         errors.append(f"estimator.k={k}: must be < budget.warmup_steps={cfg.budget.warmup_steps} (the first memory)")
     if choice(cfg.pe_imagined) == "ensemble" and cfg.transition_ensemble < 2:
         errors.append(f"pe_imagined=ensemble: needs transition_ensemble >= 2, got {cfg.transition_ensemble}")
+    from curiosity.runtime.device import device_error, resolve_device  # imports torch: only once the config is read
+
+    device = choice(cfg.device) if "device" in cfg else "cpu"
+    why = device_error(device)
+    if why:
+        errors.append(why)
+    elif resolve_device(device).type != "cpu" and cfg.baseline.name in CPU_ONLY_BASELINES:
+        errors.append(f"device={device}: baseline={cfg.baseline.name} runs on the CPU only (its intrinsic-reward "
+                      "networks do not move to a device yet); allowed: device=cpu")  # fmt: skip
     if cfg.budget.warmup_steps < cfg.n_step:
         errors.append(f"budget.warmup_steps={cfg.budget.warmup_steps}: must be >= n_step={cfg.n_step} (segments to sample)")
     if cfg.budget.max_steps <= cfg.budget.warmup_steps:

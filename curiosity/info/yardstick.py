@@ -18,5 +18,5 @@ def latent_logdet(z: Tensor, ridge: float = 1e-3) -> float:
         raise ValueError(f"latent_logdet: needs a (B, d) batch with B >= 2, got shape {tuple(z.shape)}")
     x = z.detach().to(torch.float64)
     cov = torch.cov(x.T).reshape(x.shape[1], x.shape[1])  # (d, d); torch.cov returns a scalar when d = 1
-    sign, logdet = torch.linalg.slogdet(cov + ridge * torch.eye(x.shape[1], dtype=torch.float64))
+    sign, logdet = torch.linalg.slogdet(cov + ridge * torch.eye(x.shape[1], dtype=torch.float64, device=x.device))
     return float(logdet) if float(sign) > 0 else float("-inf")

@@ -45,8 +45,8 @@ class EmbeddingMemory:
         self.n_seen = 0
         self._size = 0
         self._data: Tensor | None = None
-        self._keys = torch.empty(0, dtype=torch.long)
-        self._gen = torch.Generator().manual_seed(int(seed))
+        self._keys = torch.empty(0, dtype=torch.long, device="cpu")  # keys and the reservoir's draws stay on the host
+        self._gen = torch.Generator(device="cpu").manual_seed(int(seed))
 
     def __len__(self) -> int:
         """Number of stored items M."""
@@ -73,18 +73,18 @@ class EmbeddingMemory:
                 new_cap = min(new_cap, self.limit)
             data = self._data.new_empty((new_cap, self._data.shape[1]))
             data[: self._size] = self._data[: self._size]
-            keys = torch.empty(new_cap, dtype=torch.long)
+            keys = torch.empty(new_cap, dtype=torch.long, device="cpu")
             keys[: self._size] = self._keys[: self._size]
             self._data, self._keys = data, keys
 
     def _slots(self, b: int) -> Tensor:
         """Destination slot of each of b incoming items (−1 = dropped); later items win on repeated slots."""
-        t = torch.arange(self.n_seen, self.n_seen + b)
+        t = torch.arange(self.n_seen, self.n_seen + b, device="cpu")
         if self.limit is None:
             return t
         if self.mode == "exact":
             return t % self.limit
-        j = (torch.rand(b, generator=self._gen, dtype=torch.float64) * (t + 1).to(torch.float64)).floor().long()
+        j = (torch.rand(b, generator=self._gen, dtype=torch.float64, device="cpu") * (t + 1).to(torch.float64)).floor().long()
         slots = torch.where(t < self.limit, t, j)
         return torch.where(slots < self.limit, slots, torch.full_like(slots, -1))
 
@@ -93,12 +93,12 @@ class EmbeddingMemory:
         if emb.dim() != 2:
             raise ValueError(f"emb must be (B, d), got {tuple(emb.shape)}")
         b = emb.shape[0]
-        keys = torch.arange(self.n_seen, self.n_seen + b) if keys is None else keys.reshape(-1).long().cpu()
+        keys = torch.arange(self.n_seen, self.n_seen + b, device="cpu") if keys is None else keys.reshape(-1).long().cpu()
         if keys.shape[0] != b:
             raise ValueError(f"got {keys.shape[0]} keys for {b} embeddings")
         slots = self._slots(b)
         self._ensure_room(emb, min(self.n_seen + b, self.limit or self.n_seen + b))
-        rows = torch.arange(b)[slots >= 0]
+        rows = torch.arange(b, device="cpu")[slots >= 0]
         slots = slots[slots >= 0]
         uniq, inverse = torch.unique(slots, return_inverse=True)
         last = torch.full_like(uniq, -1).scatter_reduce(0, inverse, rows, reduce="amax")

@@ -82,10 +82,10 @@ class MPCPlanner:
         """
         total = self.n_actions**self.horizon
         if total <= self.max_candidates:
-            codes = torch.arange(total).unsqueeze(1)
-            powers = self.n_actions ** torch.arange(self.horizon - 1, -1, -1)
+            codes = torch.arange(total, device="cpu").unsqueeze(1)  # candidates are made on the host (CPU generator)
+            powers = self.n_actions ** torch.arange(self.horizon - 1, -1, -1, device="cpu")
             return torch.div(codes, powers, rounding_mode="floor") % self.n_actions
-        return torch.randint(self.n_actions, (self.max_candidates, self.horizon), generator=generator)
+        return torch.randint(self.n_actions, (self.max_candidates, self.horizon), generator=generator, device="cpu")
 
     def score_terms(
         self,
@@ -157,7 +157,7 @@ class MPCPlanner:
 
     def first_action_probs(self, seqs: Tensor, probs: Tensor) -> Tensor:
         """(A,) probability of each first action under the choice probabilities ``probs`` (N,) of ``seqs`` (N, H)."""
-        return torch.zeros(self.n_actions, dtype=probs.dtype).index_add_(0, seqs[:, 0].cpu(), probs.cpu())
+        return torch.zeros(self.n_actions, dtype=probs.dtype, device="cpu").index_add_(0, seqs[:, 0].cpu(), probs.cpu())
 
     def plan(
         self,

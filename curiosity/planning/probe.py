@@ -34,7 +34,7 @@ def tree_latents(rollout: Rollout, n_actions: int, horizon: int) -> list[Tensor]
     """
     out, width = [], 1
     for _ in range(horizon):
-        index = torch.arange(width * n_actions)
+        index = torch.arange(width * n_actions, device=rollout.latents().device)
         out.append(rollout.expand(index // n_actions, index % n_actions))
         width *= n_actions
     return out
@@ -79,7 +79,7 @@ def probe_model(planner: MPCPlanner, z0: Tensor, step_fn: StepFn, reward_fn: Sco
         out[f"probe/error/{k}"] = _rms(zp - zt)
         if effect_true > 0:
             out[f"probe/effect_ratio/{k}"] = effect_pred / effect_true
-    seqs = planner.candidates(torch.Generator().manual_seed(0))
+    seqs = planner.candidates(torch.Generator(device="cpu").manual_seed(0))
     g_model = planner.scores(z0, seqs, step_fn, reward_fn, intrinsic_fn).cpu().numpy()
     full = len(seqs) == a**h  # all sequences: score the true tree above again instead of simulating it twice
     replay = ReplayRollout(z0, true) if full else SimulatorRollout(simulator, root, z0, encode)

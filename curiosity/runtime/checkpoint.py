@@ -67,7 +67,7 @@ def _read(path: Path) -> tuple[dict[str, Any] | None, str]:
     import torch
 
     try:
-        state = torch.load(path, weights_only=False)
+        state = torch.load(path, weights_only=False, map_location="cpu")  # any device's checkpoint; agents move it
     except Exception as err:  # unpickling a damaged file can fail in many ways; all mean "unreadable"
         return None, " ".join(f"{type(err).__name__}: {err}".split())[:120]
     if not isinstance(state, dict) or not all(k in state for k in _KEYS):

@@ -31,7 +31,7 @@ log = logging.getLogger(__name__)
 
 CHART_KEYS = ("charts/coverage", "charts/wall_time", "charts/sps", "charts/extrinsic_reward", "intrinsic/reward")
 # Keys that do not change what a run computes: a run may resume with other values of them.
-VOLATILE_KEYS = ("progress", "threads", "resume", "checkpoint_every")
+VOLATILE_KEYS = ("progress", "threads", "device", "resume", "checkpoint_every")
 
 
 class Interrupted(KeyboardInterrupt):
