@@ -20,8 +20,12 @@ def machine() -> dict[str, str | int]:
             cpu = next(line.split(":", 1)[1].strip() for line in f if line.startswith("model name"))
     except (OSError, StopIteration):
         pass
+    from curiosity.runtime.summary import git_commit
+
+    commit, dirty = git_commit()
     return {"cpu": cpu, "cores": os.cpu_count() or 0, "python": platform.python_version(), "torch": torch.__version__,
-            "torch_threads": torch.get_num_threads(), "platform": platform.platform()}  # fmt: skip
+            "torch_threads": torch.get_num_threads(), "platform": platform.platform(),
+            "commit": f"{commit}{'-dirty' if dirty else ''}"}  # fmt: skip
 
 
 def timed(fn: Callable[[], object], repeats: int, warmup: int = 2) -> float:
