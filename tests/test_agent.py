@@ -182,3 +182,47 @@ def test_each_observation_is_encoded_once_per_encoder_state() -> None:
         with agent.model.evaluating():
             fresh = agent.model.encode(torch.as_tensor(obs).unsqueeze(0))[0]
         assert torch.equal(agent.encode_obs(obs), fresh)
+
+
+def test_planner_commit_executes_the_chosen_sequence_before_planning_again() -> None:
+    from curiosity.envs import make_env
+
+    cfg = compose_cfg(["env.renderer=fast", "budget=smoke", "budget.warmup_steps=4", "batch_size=4", "planner.horizon=3",
+                       "planner.commit=3", "probe_every=0"])  # fmt: skip
+    agent = PaperAgent(cfg)
+    env = make_env(cfg.env, 100)
+    obs, _ = env.reset(seed=0)
+    plans, executed, chosen = 0, [], []
+    plan = agent.planner.plan
+
+    def counting_plan(*args, **kwargs):
+        nonlocal plans
+        plans += 1
+        out = plan(*args, **kwargs)
+        chosen.extend(agent.planner.last_sequence)
+        return out
+
+    agent.planner.plan = counting_plan
+    for step in range(4 + 12):
+        action = agent.act(obs, step) if step >= 4 else step % 3
+        if step >= 4:
+            executed.append(action)
+        nxt, r, term, _, _ = env.step(action)
+        agent.observe(obs, action, float(r), nxt, bool(term), step)
+        obs = nxt
+        if step == 8:  # mid-sequence: the queue survives a checkpoint round trip
+            state = agent.state_dict()
+            assert state["queue"] == agent.queue and len(agent.queue) == 1
+            agent.queue = []
+            agent.load_state_dict(state)
+            assert agent.queue == state["queue"]
+    assert plans == 4 and executed == chosen  # 12 agent steps, 3 actions per plan, every planned action executed
+
+
+def test_planner_commit_beyond_the_horizon_is_refused() -> None:
+    from curiosity.config import ConfigError, validate
+
+    with pytest.raises(ConfigError, match=r"planner.commit=4: must be <= planner.horizon=3"):
+        validate(compose_cfg(["planner.horizon=3", "planner.commit=4"]))
+    with pytest.raises(ConfigError, match=r"planner.commit=0"):
+        validate(compose_cfg(["planner.commit=0"]))

@@ -110,6 +110,8 @@ class PaperAgent(Agent):
         self.simulator: Simulator | None = None
         self.totals: dict[str, list[float]] = {}  # key -> [sum, count] of SUMMARY_KEYS
         self._latent: tuple[np.ndarray, torch.Tensor] | None = None  # the last observation encoded, until training
+        self.commit = int(OmegaConf.select(cfg, "planner.commit", default=1))
+        self.queue: list[int] = []  # actions of the last chosen sequence still to execute (planner.commit > 1)
 
     def attach_env(self, env: Any) -> None:
         """Keep the run's env when the oracle planner or the probe branch its simulator."""
@@ -187,6 +189,9 @@ class PaperAgent(Agent):
         return out
 
     def act(self, obs: np.ndarray, step: int) -> int:
+        if self.queue:  # planner.commit > 1: the chosen sequence's next action, without planning
+            self._plan_logs = {}
+            return self.queue.pop(0)
         start = time.perf_counter()
         z0 = self.encode_obs(obs)
         with self.model.evaluating():
@@ -201,6 +206,8 @@ class PaperAgent(Agent):
                 logs.update(self._probe(z0, obs, step))
         self._tally(logs)
         self._plan_logs = logs
+        if self.commit > 1:
+            self.queue = list(self.planner.last_sequence[1 : self.commit])
         return action
 
     # ------------------------------------------------------------------ learning
@@ -296,6 +303,7 @@ class PaperAgent(Agent):
             "optimizer": self.optimizer.state_dict(), "replay": self.replay.state_dict(),
             "curiosity": self.curiosity.state_dict(), "schedule": self.schedule.state_dict(),
             "rng": self.rng.bit_generator.state, "generator": self.generator.get_state(), "totals": self.totals,
+            "queue": list(self.queue),
         }  # fmt: skip
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
@@ -310,3 +318,4 @@ class PaperAgent(Agent):
         self.rng.bit_generator.state = state["rng"]
         self.generator.set_state(state["generator"])
         self.totals = {k: list(v) for k, v in state.get("totals", {}).items()}
+        self.queue = list(state.get("queue", []))  # checkpoints before planner.commit had none

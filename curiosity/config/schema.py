@@ -196,6 +196,7 @@ class MPCConfig:
     n_actions: int = "${env.n_actions}"  # type: ignore[assignment]
     temperature_scale: TemperatureScale = TemperatureScale.absolute
     model: PlannerModel = PlannerModel.learned
+    commit: int = 1  # actions of the chosen sequence executed before planning again (1: receding horizon)
 
 
 @dataclass

@@ -74,6 +74,7 @@ RULES: list[Rule] = [
     ("planner.temperature", lambda v: v >= 0, "a number >= 0 (0 = argmax)"),
     ("planner.eta", lambda v: v >= 0, "a number >= 0"),
     ("planner.max_candidates", lambda v: v >= 1, "an integer >= 1"),
+    ("planner.commit", lambda v: v >= 1, "an integer >= 1 (1: plan at every step)"),
     ("transition_ensemble", lambda v: v >= 1, "an integer >= 1 (1: one transition model)"),
     ("memory_refresh_drift", lambda v: v >= 0, "a number >= 0 (0: refresh on the schedule only)"),
     ("probe_every", lambda v: v >= 0, "an integer >= 0 (0: no model probe)"),
@@ -153,6 +154,9 @@ def _planner_errors(cfg: DictConfig) -> list[str]:
     """MPC scores every action sequence unless sampling is asked for; a tree planner expands A^H leaves per step."""
     planner, a = cfg.planner, int(cfg.planner.n_actions)
     h = int(planner.horizon)
+    commit = OmegaConf.select(planner, "commit", default=1)
+    if commit > h:
+        return [f"planner.commit={commit}: must be <= planner.horizon={h} (the plan has {h} actions)"]
     total = a**h
     limit = OmegaConf.select(planner, "max_candidates", default=None)
     if limit is None:

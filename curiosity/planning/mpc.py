@@ -39,6 +39,8 @@ class MPCPlanner:
         sample_candidates: whether to sample ``max_candidates`` sequences when A^H exceeds it (else ValueError).
         model: where imagined futures come from: ``learned`` (the world model) or ``oracle`` (the real simulator,
             rendered and encoded: the upper bound a learned model is measured against). The agent builds the rollout.
+        commit: how many actions of the chosen sequence the agent executes before it plans again (1: replan at every
+            step, receding horizon); the planner keeps the chosen sequence in ``last_sequence``.
     """
 
     uses_q = False  # whether the agent must train a Q-function for this planner
@@ -54,7 +56,12 @@ class MPCPlanner:
         sample_candidates: bool = False,
         temperature_scale: str = "absolute",
         model: str = "learned",
+        commit: int = 1,
     ) -> None:
+        if not 1 <= commit <= horizon:
+            raise ValueError(f"planner.commit must be in [1, planner.horizon={horizon}], got {commit}")
+        self.commit = int(commit)
+        self.last_sequence: list[int] = []
         if horizon < 1 or n_actions < 1 or max_candidates < 1:
             raise ValueError("horizon, n_actions and max_candidates must be >= 1")
         if n_actions**horizon > max_candidates and not sample_candidates:
@@ -200,7 +207,8 @@ class MPCPlanner:
             **{f"spread/{k}": float(v.std(correction=0)) for k, v in terms.items()},
             **{f"p_first/{a}": float(p) for a, p in enumerate(first)},
         }
-        return int(seqs[index, 0]), info
+        self.last_sequence = [int(a) for a in seqs[index]]
+        return self.last_sequence[0], info
 
 
 def _total(terms: dict[str, Tensor]) -> Tensor:
