@@ -111,3 +111,26 @@ def test_validation(replay):
         kde_log_density(replay[:, :1], replay, bandwidth=1.0)
     with pytest.raises(ValueError, match="exclude_self"):
         kde_log_density(replay[:2], replay, bandwidth=1.0, exclude_self=True)
+
+
+def test_queries_in_blocks_are_exact_and_bound_memory(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A memory scoring itself (B = N) goes block by block over the queries (a memory of 10^5 rows once needed
+    13 GB for one chunk): the values are the double loop's, with and without leave-one-out, for KDE and kNN."""
+    import curiosity.novelty._common as common
+    from curiosity.novelty import k_smallest_sq_dists
+
+    memory = _rand(23, 3, seed=8)
+    whole_kde = kde_log_density(memory, memory, bandwidth=0.7, exclude_self=True, chunk_size=7)
+    whole_knn = k_smallest_sq_dists(memory, memory, k=3, exclude_self=True, chunk_size=7)
+    monkeypatch.setattr(common, "MAX_BLOCK", 35)  # 5 queries per block with chunks of 7 memory rows
+    assert list(common.query_blocks(23, 7)) == [(0, 5), (5, 10), (10, 15), (15, 20), (20, 23)]
+    for exclude in (False, True):
+        blocked = kde_log_density(memory, memory, bandwidth=0.7, exclude_self=exclude, chunk_size=7)
+        torch.testing.assert_close(blocked, torch.tensor(_kde_loop(memory, memory, 0.7, exclude), dtype=F64),
+                                   atol=1e-10, rtol=0)  # fmt: skip
+    torch.testing.assert_close(kde_log_density(memory, memory, bandwidth=0.7, exclude_self=True, chunk_size=7), whole_kde,
+                               atol=1e-12, rtol=0)  # fmt: skip
+    blocked_knn = k_smallest_sq_dists(memory, memory, k=3, exclude_self=True, chunk_size=7)
+    torch.testing.assert_close(blocked_knn, whole_knn, atol=1e-12, rtol=0)
+    brute = torch.cdist(memory, memory).square().fill_diagonal_(math.inf).sort(dim=1).values[:, :3]
+    torch.testing.assert_close(blocked_knn, brute, atol=1e-10, rtol=0)

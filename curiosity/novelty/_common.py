@@ -11,6 +11,14 @@ from torch import Tensor
 from curiosity.info.kernels import check_2d
 
 DEFAULT_CHUNK = 16384
+MAX_BLOCK = 2**23  # float64 distances held at once (64 MB): queries are split into blocks of MAX_BLOCK // chunk rows
+
+
+def query_blocks(n_query: int, chunk_size: int) -> Iterator[tuple[int, int]]:
+    """(start, stop) blocks of the queries such that a block times a memory chunk stays within ``MAX_BLOCK`` values
+    (one block for the planner's few hundred queries; a memory scoring itself, B = N, goes block by block)."""
+    step = max(1, MAX_BLOCK // max(chunk_size, 1))
+    yield from itertools.pairwise([*range(0, n_query, step), n_query])
 
 
 def check_query_memory(query: Tensor, memory: Tensor, exclude_self: bool) -> None:

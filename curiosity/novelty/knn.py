@@ -8,7 +8,7 @@ import torch
 from torch import Tensor
 
 from curiosity.info.kernels import out_dtype
-from curiosity.novelty._common import DEFAULT_CHUNK, check_query_memory, chunks, needs_grad, sq_dists_chunk
+from curiosity.novelty._common import DEFAULT_CHUNK, check_query_memory, chunks, needs_grad, query_blocks, sq_dists_chunk
 
 
 def k_smallest_sq_dists(
@@ -31,16 +31,20 @@ def k_smallest_sq_dists(
         raise ValueError(f"need 1 <= k <= {memory.shape[0] - int(exclude_self)} neighbours, got k={k}")
     inplace = not needs_grad(query, memory)
     q64 = query.to(torch.float64)
-    q2 = q64.pow(2).sum(-1, keepdim=True)
-    rows = torch.arange(query.shape[0], device=query.device).unsqueeze(1)
-    best = q64.new_empty((query.shape[0], 0))
-    for start, stop in chunks(memory.shape[0], chunk_size):
-        d2 = sq_dists_chunk(q64, q2, memory[start:stop].to(torch.float64), inplace)
-        if exclude_self:
-            d2 = d2.masked_fill(rows == torch.arange(start, stop, device=query.device).unsqueeze(0), math.inf)
-        merged = torch.cat([best, d2], dim=1)
-        best = torch.topk(merged, min(k, merged.shape[1]), dim=1, largest=False, sorted=True).values
-    return best
+    blocks = []
+    for q0, q1 in query_blocks(query.shape[0], chunk_size):  # bounded memory when the memory scores itself
+        q = q64[q0:q1]
+        q2 = q.pow(2).sum(-1, keepdim=True)
+        rows = torch.arange(q0, q1, device=query.device).unsqueeze(1)
+        best = q.new_empty((q1 - q0, 0))
+        for start, stop in chunks(memory.shape[0], chunk_size):
+            d2 = sq_dists_chunk(q, q2, memory[start:stop].to(torch.float64), inplace)
+            if exclude_self:
+                d2 = d2.masked_fill(rows == torch.arange(start, stop, device=query.device).unsqueeze(0), math.inf)
+            merged = torch.cat([best, d2], dim=1)
+            best = torch.topk(merged, min(k, merged.shape[1]), dim=1, largest=False, sorted=True).values
+        blocks.append(best)
+    return blocks[0] if len(blocks) == 1 else torch.cat(blocks)
 
 
 def knn_distance(
