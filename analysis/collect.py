@@ -99,7 +99,8 @@ def load_summaries(root: str | Path) -> pd.DataFrame:
     rows = []
     for d in run_dirs(root):
         row = json.loads((d / "summary.json").read_text())
-        cfg = yaml.safe_load((d / ".hydra" / "config.yaml").read_text())
+        config = d / ".hydra" / "config.yaml"
+        cfg = yaml.safe_load(config.read_text()) if config.exists() else {}  # a run made outside Hydra may have none
         for group in GROUPS:
             node = cfg.get(group)
             if isinstance(node, dict) and "name" in node:

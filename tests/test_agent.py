@@ -168,7 +168,7 @@ def test_each_observation_is_encoded_once_per_encoder_state() -> None:
         env = make_env(cfg.env, 100)
         obs, _ = env.reset(seed=0)
         calls: list[int] = []
-        agent.model.encoder.register_forward_hook(lambda m, inp, out: calls.append(inp[0].shape[0]))
+        agent.model.encoder.register_forward_hook(lambda m, inp, out, calls=calls: calls.append(inp[0].shape[0]))
         per_step = []
         for step in range(12):
             before = len(calls)

@@ -3,6 +3,8 @@ bootstrap CI on the same arrays, config-defined rows, explicit pooling, censored
 
 from __future__ import annotations
 
+import shutil
+
 import math
 
 import numpy as np
@@ -100,3 +102,14 @@ def test_bad_input_is_one_line(tmp_path) -> None:
     for args in ([tmp_path], [tmp_path / "missing"], [tmp_path, "--pool", "nolabel"]):
         res = analysis("tables", *args)
         assert res.returncode != 0 and res.stderr.startswith("error: ") and len(res.stderr.splitlines()) == 1
+
+
+def test_a_run_without_a_hydra_config_is_read_from_its_summary(tmp_path) -> None:
+    """A run made outside Hydra (e.g. in-process) may lack ``.hydra/config.yaml``: its summary still counts."""
+    from analysis.collect import load_summaries
+    from tests.synthetic_runs import make_run
+
+    d = make_run(tmp_path, "acrobot", "nsrs", 0, 640)
+    shutil.rmtree(d / ".hydra")
+    (row,) = load_summaries(tmp_path).to_dict("records")
+    assert row["steps_to_goal"] == 640 and row["method"] == "nsrs" and "entropy" not in row

@@ -60,7 +60,7 @@ def test_planning_at_a_small_memory_reports_exact_kde_as_exact() -> None:
 def test_seed_runs_time_every_part_and_read_the_summary(tmp_path: Path) -> None:
     rows = seed_runs([3], ["budget=smoke", "budget.max_steps=70", "env.renderer=fast", "probe_every=0"], tmp_path)
     (row,) = rows
-    summary = json.loads((tmp_path / "seed=3" / "summary.json").read_text())
+    summary = json.loads((tmp_path / "default" / "seed=3" / "summary.json").read_text())
     assert row["wall_s"] == summary["wall_seconds"] and row["steps_to_goal"] == summary["steps_to_goal"]
     shares = row["wall_share"]
     assert {"env+render", "encode", "plan", "novelty", "refresh", "train", "logging", "checkpoint"} <= set(shares)
@@ -76,12 +76,19 @@ def test_parse_defaults_and_report_render() -> None:
     quick, full = parse(["--quick"]), parse([])
     assert (quick.batches, quick.memory, quick.seeds) == ([64], [1000], [100])
     assert (full.batches, full.memory, full.seeds) == ([32, 64, 128], [1000, 10_000, 100_000], [100, 101, 102, 103])
-    res = {"machine": {"cpu": "x"}, "quick": True, "env_steps_per_s": {"gym": 1.0, "fast": 2.0, "state": 3.0},
-           "train_iter_ms": {64: 10.0}, "train_iter_baseline": {"batch": 64, "ms": 10.0, "baseline_ms": 25.0,
-                                                                  "commit": "abc", "speedup": 2.5},
-           "plan_step_ms": {1000: 3.0}, "refresh_ms": {1000: 5.0}, "novelty_log_rho_error": {1000: {"median": 0.0, "p99": 0.0}},
-           "sweep": {"jobs": 4, "one_job_s": 10.0, "two_jobs_s": 5.5, "speedup": 1.82},
-           "seeds": [{"seed": 100, "steps_to_goal": 200, "wall_s": 100.0}], "wall_share": {"train": 0.5, "other": 0.5}}  # fmt: skip
+    res = {
+        "machine": {"cpu": "x"},
+        "quick": True,
+        "env_steps_per_s": {"gym": 1.0, "fast": 2.0, "state": 3.0},
+        "train_iter_ms": {64: 10.0},
+        "train_iter_baseline": {"batch": 64, "ms": 10.0, "baseline_ms": 25.0, "commit": "abc", "speedup": 2.5},
+        "plan_step_ms": {1000: 3.0},
+        "refresh_ms": {1000: 5.0},
+        "novelty_log_rho_error": {1000: {"median": 0.0, "p99": 0.0}},
+        "sweep": {"jobs": 4, "one_job_s": 10.0, "two_jobs_s": 5.5, "speedup": 1.82},
+        "seeds": [{"seed": 100, "steps_to_goal": 200, "wall_s": 100.0}],
+        "wall_share": {"train": 0.5, "other": 0.5},
+    }
     text = report(res)
     assert "speed-up 2.50x" in text and "| 100 | 200 | 100 |" in text and "train 50.0%" in text
 

@@ -107,7 +107,8 @@ class LatentCuriosity(IntrinsicReward):
 
     def add(self, z: Tensor, a: int, index: int) -> None:
         """Store the embedding of the pair (s_t, a_t) of transition ``index`` (z: (d,) latent of o_t)."""
-        self.memory.add(self.embed(z.unsqueeze(0), torch.tensor([a], device=z.device)), keys=torch.tensor([index], device="cpu"))
+        emb = self.embed(z.unsqueeze(0), torch.tensor([a], device=z.device))
+        self.memory.add(emb, keys=torch.tensor([index], device="cpu"))
         if self.ready:
             self.estimator.set_memory(self.memory.tensor())
 

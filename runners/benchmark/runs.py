@@ -13,6 +13,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from omegaconf import DictConfig, OmegaConf
+
 import curiosity.runtime.loop as loop
 from curiosity.config.compose import compose_config
 from curiosity.runtime.logger import RunLogger
@@ -71,16 +73,27 @@ def _instrument(timer: PartTimer) -> None:
         timer.wrap(RunLogger, method, "logging")
 
 
+def write_config(cfg: DictConfig, overrides: list[str], run_dir: Path) -> None:
+    """``.hydra/config.yaml`` and ``overrides.yaml`` of a run the benchmark makes in-process (as a Hydra job would), so
+    the analysis commands read it like any run."""
+    out = run_dir / ".hydra"
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "config.yaml").write_text(OmegaConf.to_yaml(cfg), encoding="utf-8")
+    (out / "overrides.yaml").write_text(OmegaConf.to_yaml(OmegaConf.create(list(overrides))), encoding="utf-8")
+
+
 def seed_runs(seeds: Sequence[int], overrides: Sequence[str], out_dir: Path) -> list[dict[str, Any]]:
-    """Run the configured agent once per seed, alone, in this process, each into ``out_dir/seed=<n>`` (resumed
+    """Run the configured agent once per seed, alone, in this process, each into ``out_dir/default/seed=<n>`` (resumed
     if already there); return each seed's steps-to-goal, wall seconds (``summary.json``) and wall share by part."""
     rows = []
     for seed in seeds:
-        run_dir = out_dir / f"seed={seed}"
+        run_dir = out_dir / "default" / f"seed={seed}"  # the layout of a run, so the analysis names its command
         timer = PartTimer()
         _instrument(timer)
+        args = [*overrides, f"seed={seed}", "progress=false"]
+        cfg = compose_config(args)
         try:
-            summary = loop.run(compose_config([*overrides, f"seed={seed}", "progress=false"]), run_dir)
+            summary = loop.run(cfg, run_dir, on_start=lambda c=cfg, a=args, d=run_dir: write_config(c, a, d))
         finally:
             timer.restore()
         saved = json.loads((run_dir / "summary.json").read_text())

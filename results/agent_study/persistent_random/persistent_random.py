@@ -1,6 +1,7 @@
 """Steps-to-goal on Acrobot of uniformly random policies with action persistence (no learning), 64 uniform warm-up
 steps first as in every run; cap 3000."""
-import json, sys
+import json
+import sys
 import numpy as np
 import gymnasium as gym
 
