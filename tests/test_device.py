@@ -7,8 +7,7 @@ from __future__ import annotations
 import pytest
 import torch
 
-from curiosity.agents.paper import PaperAgent
-from curiosity.config import ConfigError, validate
+from curiosity.config import ConfigError, build, validate
 from curiosity.envs import make_env
 from curiosity.runtime.device import resolve_device, to_device
 from tests.conftest import compose_cfg
@@ -21,7 +20,7 @@ SMALL = ["env.renderer=fast", "budget=smoke", "budget.warmup_steps=8", "batch_si
                                        ["planner.horizon=2", "planner.model=oracle", "probe_every=0"]])  # fmt: skip
 def test_acting_learning_and_resuming_create_tensors_only_on_the_configured_device(overrides: list[str]) -> None:
     cfg = compose_cfg([*SMALL, *overrides, "device=cpu"])
-    agent = PaperAgent(cfg) if "baseline=nsrs" not in overrides else _build(cfg)
+    agent = build(cfg.baseline, cfg=cfg)  # the paper's agent, or NSRS built on it
     env = make_env(cfg.env, 100)
     agent.attach_env(env)
     obs, _ = env.reset(seed=0)
@@ -47,12 +46,6 @@ def test_acting_learning_and_resuming_create_tensors_only_on_the_configured_devi
     device = resolve_device("cpu")
     assert all(p.device == device for p in agent.model.parameters())
     assert agent.curiosity.memory.tensor().device == device
-
-
-def _build(cfg):  # NSRS: the paper's agent built from NSRS's settings
-    from curiosity.config import build
-
-    return build(cfg.baseline, cfg=cfg)
 
 
 def test_resolve_and_move() -> None:

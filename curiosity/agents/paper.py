@@ -110,7 +110,6 @@ class PaperAgent(Agent):
         self.simulator: Simulator | None = None
         self.totals: dict[str, list[float]] = {}  # key -> [sum, count] of SUMMARY_KEYS
         self._latent: tuple[np.ndarray, torch.Tensor] | None = None  # the last observation encoded, until training
-        self.commit = int(OmegaConf.select(cfg, "planner.commit", default=1))
         self.queue: list[int] = []  # actions of the last chosen sequence still to execute (planner.commit > 1)
 
     def attach_env(self, env: Any) -> None:
@@ -206,8 +205,8 @@ class PaperAgent(Agent):
                 logs.update(self._probe(z0, obs, step))
         self._tally(logs)
         self._plan_logs = logs
-        if self.commit > 1:
-            self.queue = list(self.planner.last_sequence[1 : self.commit])
+        if self.planner.commit > 1:
+            self.queue = list(self.planner.last_sequence[1 : self.planner.commit])
         return action
 
     # ------------------------------------------------------------------ learning

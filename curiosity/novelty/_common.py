@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+import math
 from collections.abc import Iterator
 
 import torch
@@ -46,6 +47,20 @@ def chunks(n: int, chunk_size: int, min_size: int = 1) -> Iterator[tuple[int, in
 def needs_grad(*xs: Tensor) -> bool:
     """True when autograd will record operations on any of ``xs`` (then no in-place shortcuts)."""
     return torch.is_grad_enabled() and any(x.requires_grad for x in xs)
+
+
+def sq_dist_chunks(q64: Tensor, row0: int, memory: Tensor, chunk_size: int, *, exclude_self: bool, inplace: bool,
+                   min_size: int = 1) -> Iterator[Tensor]:  # fmt: skip
+    """Squared distances (b, stop − start) of float64 queries ``q64`` (b, d), the memory's rows row0 … row0 + b − 1
+    when ``exclude_self``, to each chunk of ``memory`` (:func:`chunks`); with ``exclude_self`` a query's own memory
+    row is at distance inf."""
+    q2 = q64.pow(2).sum(-1, keepdim=True)
+    rows = torch.arange(row0, row0 + q64.shape[0], device=q64.device).unsqueeze(1)
+    for start, stop in chunks(memory.shape[0], chunk_size, min_size=min_size):
+        d2 = sq_dists_chunk(q64, q2, memory[start:stop].to(torch.float64), inplace)
+        if exclude_self:
+            d2 = d2.masked_fill(rows == torch.arange(start, stop, device=q64.device).unsqueeze(0), math.inf)
+        yield d2
 
 
 def sq_dists_chunk(q64: Tensor, q2: Tensor, m64: Tensor, inplace: bool) -> Tensor:

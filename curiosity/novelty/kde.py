@@ -8,7 +8,7 @@ import torch
 from torch import Tensor
 
 from curiosity.info.kernels import out_dtype
-from curiosity.novelty._common import DEFAULT_CHUNK, check_query_memory, chunks, needs_grad, query_blocks, sq_dists_chunk
+from curiosity.novelty._common import DEFAULT_CHUNK, check_query_memory, needs_grad, query_blocks, sq_dist_chunks
 
 
 def _chunk_log_sum(d2: Tensor, inv_two_h2: float, inplace: bool) -> Tensor:
@@ -61,16 +61,10 @@ def kde_log_density(
     q64 = query.to(torch.float64)
     blocks = []
     for q0, q1 in query_blocks(query.shape[0], chunk_size):
-        q = q64[q0:q1]
-        q2 = q.pow(2).sum(-1, keepdim=True)
-        rows = torch.arange(q0, q1, device=query.device).unsqueeze(1)
-        parts = []
         # with exclude_self every chunk has >= 2 columns, so no row of a chunk is entirely left out
-        for start, stop in chunks(memory.shape[0], chunk_size, min_size=2 if exclude_self else 1):
-            d2 = sq_dists_chunk(q, q2, memory[start:stop].to(torch.float64), inplace)
-            if exclude_self:
-                d2 = d2.masked_fill(rows == torch.arange(start, stop, device=query.device).unsqueeze(0), math.inf)
-            parts.append(_chunk_log_sum(d2, inv_two_h2, inplace))
+        parts = [_chunk_log_sum(d2, inv_two_h2, inplace)
+                 for d2 in sq_dist_chunks(q64[q0:q1], q0, memory, chunk_size, exclude_self=exclude_self, inplace=inplace,
+                                          min_size=2 if exclude_self else 1)]  # fmt: skip
         blocks.append(parts[0] if len(parts) == 1 else torch.logsumexp(torch.stack(parts, dim=1), dim=1))
     log_rho = blocks[0] if len(blocks) == 1 else torch.cat(blocks)
     return (log_rho - math.log(n)).to(out_dtype(query, memory))

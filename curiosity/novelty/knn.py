@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import math
 
 import torch
 from torch import Tensor
 
 from curiosity.info.kernels import out_dtype
-from curiosity.novelty._common import DEFAULT_CHUNK, check_query_memory, chunks, needs_grad, query_blocks, sq_dists_chunk
+from curiosity.novelty._common import DEFAULT_CHUNK, check_query_memory, needs_grad, query_blocks, sq_dist_chunks
 
 
 def k_smallest_sq_dists(
@@ -33,14 +32,8 @@ def k_smallest_sq_dists(
     q64 = query.to(torch.float64)
     blocks = []
     for q0, q1 in query_blocks(query.shape[0], chunk_size):  # bounded memory when the memory scores itself
-        q = q64[q0:q1]
-        q2 = q.pow(2).sum(-1, keepdim=True)
-        rows = torch.arange(q0, q1, device=query.device).unsqueeze(1)
-        best = q.new_empty((q1 - q0, 0))
-        for start, stop in chunks(memory.shape[0], chunk_size):
-            d2 = sq_dists_chunk(q, q2, memory[start:stop].to(torch.float64), inplace)
-            if exclude_self:
-                d2 = d2.masked_fill(rows == torch.arange(start, stop, device=query.device).unsqueeze(0), math.inf)
+        best = q64.new_empty((q1 - q0, 0))
+        for d2 in sq_dist_chunks(q64[q0:q1], q0, memory, chunk_size, exclude_self=exclude_self, inplace=inplace):
             merged = torch.cat([best, d2], dim=1)
             best = torch.topk(merged, min(k, merged.shape[1]), dim=1, largest=False, sorted=True).values
         blocks.append(best)

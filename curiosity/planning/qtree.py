@@ -31,6 +31,7 @@ class QTreePlanner:
     """
 
     uses_q = True  # whether the agent must train a Q-function for this planner
+    commit = 1  # actions executed per search: the tree's value is for the first action only
 
     def __init__(self, horizon: int = 5, gamma: float = 0.8, n_actions: int = 3) -> None:
         if horizon < 1:
