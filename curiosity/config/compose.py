@@ -101,6 +101,7 @@ LEGACY: dict[str, Any] = {
     "planner.model": "learned",
     "planner.temperature_scale": "absolute",
     "planner.sample_candidates": False,
+    "planner.commit": 1,
 }
 
 
