@@ -38,6 +38,9 @@ def parse(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--batches", type=int, nargs="+", help="training batch sizes (default 32 64 128; quick: 64)")
     p.add_argument("--memory", type=int, nargs="+", help="memory sizes N (default 1000 10000 100000; quick: 1000)")
     p.add_argument("--repeats", type=int, help="timed calls per median (default 20; quick: 8)")
+    p.add_argument("--reservoir", type=int, default=4096,
+                   help="also measure planning, refresh and log rho error with memory_mode=reservoir of this size at the "
+                        "memory sizes above it (0: skip)")
     p.add_argument("--baseline-commit", default=BASELINE_COMMIT, help="commit to time the training iteration against")
     p.add_argument("--seeds", type=int, nargs="*", help="seeds of the default agent to run alone (default 100-103)")
     p.add_argument("--seed-dir", help="where the seed runs go (default: a temporary directory); re-running resumes")
@@ -64,6 +67,13 @@ def measure(args: argparse.Namespace, seed_dir: Path) -> dict[str, Any]:
     res["refresh_ms"] = {n: v["refresh_ms"] for n, v in at.items()}
     res["novelty_log_rho_error"] = {n: {"median": v["log_rho_error_median"], "p99": v["log_rho_error_p99"]}
                                     for n, v in at.items()}  # fmt: skip
+    size = args.reservoir
+    sampled = {n: planning_at(n, args.repeats, overrides=["memory_mode=reservoir", f"memory_size={size}"])
+               for n in args.memory if 0 < size < n}  # fmt: skip
+    res["reservoir"] = {"size": size, "plan_step_ms": {n: v["plan_ms"] for n, v in sampled.items()},
+                        "refresh_ms": {n: v["refresh_ms"] for n, v in sampled.items()},
+                        "novelty_log_rho_error": {n: {"median": v["log_rho_error_median"], "p99": v["log_rho_error_p99"]}
+                                                  for n, v in sampled.items()}}  # fmt: skip
     sweep = ["budget=smoke", "budget.max_steps=70"] if args.quick else ["budget=smoke"]
     res["sweep"] = sweep_speedup(sweep)
     res["sweep_speedup_2_jobs"] = res["sweep"]["speedup"]
@@ -93,6 +103,11 @@ def report(res: dict[str, Any]) -> str:
     for n, ms in res["plan_step_ms"].items():
         e = res["novelty_log_rho_error"][n]
         lines.append(f"| {n:,} | {ms:.1f} | {res['refresh_ms'][n]:.1f} | {e['median']:.2g} / {e['p99']:.2g} |")
+    r = res.get("reservoir", {})
+    for n, ms in r.get("plan_step_ms", {}).items():
+        e = r["novelty_log_rho_error"][n]
+        lines.append(f"| {n:,} (reservoir {r['size']:,}) | {ms:.1f} | {r['refresh_ms'][n]:.1f} | "
+                     f"{e['median']:.2g} / {e['p99']:.2g} |")
     s = res["sweep"]
     lines += ["", f"{s['jobs']}-job sweep: {s['one_job_s']:.1f} s with 1 worker, {s['two_jobs_s']:.1f} s with 2: "
               f"speed-up {s['speedup']:.2f}x"]  # fmt: skip

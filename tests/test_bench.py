@@ -53,8 +53,18 @@ def test_part_timer_charges_nested_parts_exclusively_and_restores(monkeypatch: p
 
 def test_planning_at_a_small_memory_reports_exact_kde_as_exact() -> None:
     out = planning_at(80, repeats=1, queries=64)
-    assert out["plan_ms"] > 0 and out["refresh_ms"] > 0
+    assert out["plan_ms"] > 0.5 and out["refresh_ms"] > 0  # every timed act() plans (243 sequences; not a queued action)
     assert out["log_rho_error_median"] < 1e-4 and out["log_rho_error_p99"] < 1e-4  # the default estimator is exact
+    assert out["memory_rows"] == 80
+
+
+def test_planning_at_with_a_reservoir_measures_its_error_against_every_row() -> None:
+    """A reservoir of 60 of 160 rows: the memory holds 60, and its KDE (bandwidth of the whole stream) differs from
+    the exact KDE over all 160 rows, by a sampling error (not 0, and well under the ~1 nat a bandwidth off by the
+    sample's wider spacing would add)."""
+    out = planning_at(160, repeats=1, queries=64, overrides=["memory_mode=reservoir", "memory_size=60"])
+    assert out["memory_rows"] == 60
+    assert 1e-4 < out["log_rho_error_median"] < 0.5 and out["log_rho_error_p99"] < 3.0, out
 
 
 def test_seed_runs_time_every_part_and_read_the_summary(tmp_path: Path) -> None:
@@ -85,12 +95,15 @@ def test_parse_defaults_and_report_render() -> None:
         "plan_step_ms": {1000: 3.0},
         "refresh_ms": {1000: 5.0},
         "novelty_log_rho_error": {1000: {"median": 0.0, "p99": 0.0}},
+        "reservoir": {"size": 500, "plan_step_ms": {1000: 2.0}, "refresh_ms": {1000: 4.0},
+                      "novelty_log_rho_error": {1000: {"median": 0.1, "p99": 0.5}}},
         "sweep": {"jobs": 4, "one_job_s": 10.0, "two_jobs_s": 5.5, "speedup": 1.82},
         "seeds": [{"seed": 100, "steps_to_goal": 200, "wall_s": 100.0}],
         "wall_share": {"train": 0.5, "other": 0.5},
     }
     text = report(res)
     assert "speed-up 2.50x" in text and "| 100 | 200 | 100 |" in text and "train 50.0%" in text
+    assert "| 1,000 (reservoir 500) | 2.0 | 4.0 | 0.1 / 0.5 |" in text
 
 
 def test_baseline_commit_is_timed_from_its_own_worktree_and_removed() -> None:

@@ -9,6 +9,7 @@ import torch
 from sklearn.neighbors import NearestNeighbors
 
 from curiosity.novelty import k_smallest_sq_dists, knn_distance, nsrs_knn_score
+from curiosity.novelty.knn import self_knn_distances
 
 F64 = torch.float64
 
@@ -98,3 +99,24 @@ def test_validation(line):
     with pytest.raises(ValueError, match="k >= 2"):
         nsrs_knn_score(line, line, k=1)
     assert math.isfinite(knn_distance(line, line, k=6).sum().item())
+
+
+@pytest.mark.parametrize("k", [1, 3])
+def test_self_knn_distances_by_tree_match_the_exact_leave_one_out(k):
+    """The k-d tree's neighbour distances equal brute force over explicit differences (row i left out), exact
+    duplicates included: a duplicated row's nearest other row is at distance exactly 0, where the chunked
+    ||q||² + ||m||² − 2 q·m expansion leaves ~1e-8 of rounding. Tolerance: different summation orders."""
+    gen = torch.Generator().manual_seed(3)
+    memory = torch.randn(300, 4, generator=gen, dtype=torch.float64)
+    memory[10] = memory[11]  # an exact duplicate pair
+    memory[20] = memory[21] = memory[22]  # and a triple
+    tree = self_knn_distances(memory, k=k)
+    pairwise = (memory[:, None, :] - memory[None, :, :]).pow(2).sum(-1).sqrt().fill_diagonal_(math.inf)
+    exact = pairwise.sort(dim=1).values[:, :k]
+    assert tree.shape == (300, k) and tree.dtype == torch.float64
+    torch.testing.assert_close(tree, exact, rtol=1e-9, atol=1e-12)
+    assert tree[10, 0] == 0 and tree[20, 0] == 0
+    chunked = k_smallest_sq_dists(memory, memory, k=k, exclude_self=True).sqrt()
+    torch.testing.assert_close(tree, chunked, rtol=0, atol=1e-7)  # the expansion's rounding at duplicates
+    with pytest.raises(ValueError, match="neighbours"):
+        self_knn_distances(memory[:3], k=3)

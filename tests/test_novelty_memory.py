@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import math
-import time
 
 import pytest
 import torch
 
 from curiosity.novelty import EmbeddingMemory, kde_log_density
+from curiosity.novelty.estimators import KDENovelty
 
 
 def _stream(n: int, d: int = 2, seed: int = 0) -> torch.Tensor:
@@ -114,27 +114,48 @@ def test_reservoir_kde_approximates_exact_kde_at_1e5():
     s(q) ≈ sqrt((ρ_{h/√2}(q) / ρ(q)² − 1) (N − R) / (R (N − 1))), with ρ_{h/√2} the KDE of exp(−d²/h²).
     Stated tolerance: |Δ log ρ| median ≤ 0.06 and 95th percentile ≤ 0.2; every query within 5 s(q); the standardised
     errors have sd in [0.6, 1.5] (the error model holds). Seeds 0–5 all pass (max |z| 4.5, sd 0.81–1.15).
+    Its cost is measured by the benchmark (``python -m runners.bench``), not here.
     """
     n, r, h = 100_000, 10_000, 0.3
     g = torch.Generator().manual_seed(0)
     centres = torch.tensor([[0.0, 0.0], [3.0, 1.0], [-2.0, 2.5]])
     data = centres[torch.randint(0, 3, (n,), generator=g)] + torch.randn(n, 2, generator=g)
     exact, approx = EmbeddingMemory(mode="exact"), EmbeddingMemory(mode="reservoir", reservoir_size=r, seed=0)
-    t0 = time.perf_counter()
     for start in range(0, n, 1000):
         exact.add(data[start : start + 1000])
         approx.add(data[start : start + 1000])
-    add_seconds = time.perf_counter() - t0
     query = centres[torch.randint(0, 3, (256,), generator=g)] + torch.randn(256, 2, generator=g)
     log_exact = kde_log_density(query, exact.tensor(), bandwidth=h).double()
     log_sq = kde_log_density(query, exact.tensor(), bandwidth=h / math.sqrt(2)).double()
-    t0 = time.perf_counter()
     log_approx = kde_log_density(query, approx.tensor(), bandwidth=h).double()
-    query_seconds = time.perf_counter() - t0
     assert len(exact) == n and len(approx) == r
     err = log_approx - log_exact
     sd = ((log_sq - 2 * log_exact).exp() - 1).mul((n - r) / (r * (n - 1))).sqrt()
     z = err / sd
     assert err.abs().median().item() <= 0.06 and torch.quantile(err.abs(), 0.95).item() <= 0.2
     assert z.abs().max().item() <= 5.0 and 0.6 <= z.std().item() <= 1.5, (z.abs().max().item(), z.std().item())
-    assert add_seconds < 5.0 and query_seconds < 1.0
+
+
+def test_stands_for_the_stream_only_in_reservoir_mode():
+    reservoir, fifo = EmbeddingMemory(mode="reservoir", reservoir_size=10), EmbeddingMemory(mode="exact", capacity=10)
+    for mem in (reservoir, fifo):
+        mem.add(torch.randn(25, 2))
+    assert (len(reservoir), reservoir.stands_for) == (10, 25)
+    assert (len(fifo), fifo.stands_for) == (10, 10)  # the newest 10 rows are not a sample of the 25
+
+
+def test_reservoir_bandwidth_follows_the_whole_stream():
+    """The median-NN bandwidth fitted on a reservoir of R = 2,000 of N = 20,000 rows (4-D Gaussian) with
+    ``stream_size=N`` is within 15 % of the bandwidth of all N rows; without it, the sample's wider spacing gives
+    ≈ (N/R)^(1/4) = 1.78 times it. Seeds 0-4 give ratios 0.99-1.01 (corrected) and 1.76-1.80 (not)."""
+    n, r = 20_000, 2_000
+    data = torch.randn(n, 4, generator=torch.Generator().manual_seed(0), dtype=torch.float64)
+    sample = EmbeddingMemory(mode="reservoir", reservoir_size=r, seed=0)
+    sample.add(data)
+    full, corrected, plain = KDENovelty(baseline="none"), KDENovelty(baseline="none"), KDENovelty(baseline="none")
+    full.fit(data)
+    corrected.fit(sample.tensor(), stream_size=sample.stands_for)
+    plain.fit(sample.tensor())
+    h = full.reward.bandwidth
+    assert 0.85 <= corrected.reward.bandwidth / h <= 1.15
+    assert 1.6 <= plain.reward.bandwidth / h <= 2.0

@@ -129,7 +129,7 @@ class LatentCuriosity(IntrinsicReward):
             else:  # a reservoir may have dropped some of it
                 z_ref = self._encode_stored(ref_keys)
             reference = self.embed(z_ref, self.replay.actions_at(ref_keys).to(z.device))
-        self.estimator.fit(self.memory.tensor(), reference)
+        self.estimator.fit(self.memory.tensor(), reference, stream_size=self.memory.stands_for)
         self.ready = True
 
     @torch.no_grad()

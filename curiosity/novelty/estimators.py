@@ -7,7 +7,7 @@ queries: ``reward = estimator(query)``, (B, D) -> (B,), higher for rarer queries
 The latent scale drifts while the encoder trains (dispersion losses push latents apart), so bandwidths and distance
 scales can be relative to the memory's own spread, recomputed at every fit:
 ``bandwidth_rule=median_nn``: h = bandwidth × median nearest-neighbour distance in the memory (exact duplicates
-left out);
+left out; a k-d tree finds the neighbours, so a refit costs O(N log N));
 ``bandwidth_rule=scott``: h = bandwidth × N^(−1/(D+4)) (Scott's rule; with ``standardise`` as in the precursor);
 ``bandwidth_rule=fixed``: h = bandwidth.
 """
@@ -19,7 +19,7 @@ from typing import Any
 import torch
 from torch import Tensor
 
-from curiosity.novelty.knn import knn_distance, nsrs_knn_score
+from curiosity.novelty.knn import knn_distance, nsrs_knn_score, self_knn_distances
 from curiosity.novelty.rewards import KDENoveltyReward
 
 BANDWIDTH_RULES = ("fixed", "median_nn", "scott")
@@ -66,21 +66,28 @@ class KDENovelty:
     def needs_reference(self) -> bool:
         return self.reward.baseline in ("scalar", "pointwise", "printed")
 
-    def _bandwidth(self, memory: Tensor) -> float:
+    def _bandwidth(self, memory: Tensor, stream_size: int) -> float:
         if self.rule == "fixed" or len(memory) < 2:
             return self.multiplier
+        n, d = max(stream_size, len(memory)), memory.shape[1]
         if self.rule == "scott":
-            return self.multiplier * len(memory) ** (-1.0 / (memory.shape[1] + 4))
-        nn = knn_distance(memory, memory, k=1, exclude_self=True)
+            return self.multiplier * n ** (-1.0 / (d + 4))
+        nn = self_knn_distances(memory, k=1)[:, 0]  # a k-d tree: O(N log N) at every refresh
         nn = nn[nn > 0]  # exact duplicates (e.g. repeated frames) say nothing about the spacing
-        return self.multiplier * (float(nn.median()) if nn.numel() else 1.0)
+        spacing = float(nn.median()) if nn.numel() else 1.0
+        # a uniform sample of M of n rows is spaced (n / M)^(1/d) times wider than the n rows themselves
+        return self.multiplier * spacing * (len(memory) / n) ** (1.0 / d)
 
     @torch.no_grad()
-    def fit(self, memory: Tensor, reference: Tensor | None = None) -> None:
-        """Refit to ``memory`` (N, D): standardisation, bandwidth, baseline statistics (reference (M, D) if needed)."""
+    def fit(self, memory: Tensor, reference: Tensor | None = None, stream_size: int | None = None) -> None:
+        """Refit to ``memory`` (N, D): standardisation, bandwidth, baseline statistics (reference (M, D) if needed).
+
+        ``stream_size``: how many rows ``memory`` stands for when it is a uniform sample of them (a reservoir); the
+        bandwidth is then the one the whole stream would get (``median_nn``: the sample's spacing × (N /
+        stream_size)^(1/D); ``scott``: of stream_size rows), so the sample's KDE estimates the whole stream's."""
         self.standardiser.fit(memory)
         mem = self.standardiser(memory)
-        self.reward.bandwidth = self._bandwidth(mem)
+        self.reward.bandwidth = self._bandwidth(mem, stream_size or len(mem))
         if self.needs_reference:
             if reference is None or len(reference) < 2:
                 raise ValueError(f"estimator.baseline={self.reward.baseline} needs the random-phase embeddings")
@@ -126,11 +133,11 @@ class KNNNovelty:
         self.memory: Tensor | None = None
         self.scale = 1.0
 
-    def fit(self, memory: Tensor, reference: Tensor | None = None) -> None:
-        """Refit to ``memory`` (N, D) (``reference`` is unused)."""
+    def fit(self, memory: Tensor, reference: Tensor | None = None, stream_size: int | None = None) -> None:
+        """Refit to ``memory`` (N, D) (``reference`` and ``stream_size`` are unused: the scale is the memory's own)."""
         self.set_memory(memory)
         if self.normalise and len(memory) > self.k:
-            self.scale = max(float(knn_distance(memory, memory, k=self.k, exclude_self=True).mean()), 1e-8)
+            self.scale = max(float(self_knn_distances(memory, k=self.k).mean()), 1e-8)
 
     def set_memory(self, memory: Tensor) -> None:
         self.memory = memory.detach()

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-
+import numpy as np
 import torch
 from torch import Tensor
 
@@ -84,3 +84,28 @@ def nsrs_knn_score(query: Tensor, memory: Tensor, *, k: int = 5, chunk_size: int
         raise ValueError(f"nsrs_knn_score needs k >= 2 (the nearest is dropped), got {k}")
     d2 = k_smallest_sq_dists(query, memory, k=k, chunk_size=chunk_size)
     return d2[:, 1:].mean(dim=1).to(out_dtype(query, memory))
+
+
+def self_knn_distances(memory: Tensor, *, k: int) -> Tensor:
+    """Euclidean distances from each memory row to its k nearest *other* rows, ascending, by a k-d tree.
+
+    The same values as ``k_smallest_sq_dists(memory, memory, k=k, exclude_self=True).sqrt()`` in O(N log N) instead of
+    O(N²) (a memory of 10^5 rows: about a second instead of minutes): the tree returns the k + 1 nearest rows, the
+    first of which is at distance 0 (the row itself, or an exact duplicate of it: either way the remaining k
+    distances are the k smallest to the other rows). No gradient; computed on the host in float64.
+
+    Args:
+        memory: (N, d) embeddings, N ≥ k + 1.
+        k: neighbours, ≥ 1.
+
+    Returns:
+        (N, k) float64 distances on ``memory``'s device.
+    """
+    from scipy.spatial import KDTree  # here, not at the top: importing the novelty package stays torch + numpy only
+
+    check_query_memory(memory, memory, exclude_self=True)
+    if k < 1 or memory.shape[0] - 1 < k:
+        raise ValueError(f"need 1 <= k <= {memory.shape[0] - 1} neighbours, got k={k}")
+    points = memory.detach().to("cpu", torch.float64).numpy()
+    dist, _ = KDTree(points).query(points, k=k + 1)
+    return torch.from_numpy(np.ascontiguousarray(dist[:, 1:])).to(memory.device)

@@ -52,6 +52,12 @@ class EmbeddingMemory:
         """Number of stored items M."""
         return self._size
 
+    @property
+    def stands_for(self) -> int:
+        """How many items the stored rows represent: the whole stream for a reservoir (a uniform sample of it), the
+        stored rows themselves otherwise (a FIFO window is not a sample of the stream)."""
+        return self.n_seen if self.mode == "reservoir" else self._size
+
     def tensor(self) -> Tensor:
         """Stored embeddings (M, d), a view of the storage (do not modify in place; copy to keep)."""
         if self._data is None:

@@ -7,11 +7,13 @@ from collections.abc import Sequence
 
 import numpy as np
 import torch
+from torch import Tensor
 
 from curiosity.agents.paper import PaperAgent
 from curiosity.config import build
 from curiosity.config.compose import compose_config
 from curiosity.envs import make_env
+from curiosity.novelty.estimators import KDENovelty
 from curiosity.novelty.kde import kde_log_density
 from curiosity.runtime.seeding import seed_everything
 from runners.benchmark.timing import timed
@@ -33,9 +35,10 @@ def env_steps_per_s(env_name: str, pipeline: str, steps: int = 400) -> float:
     return steps / (time.perf_counter() - start)
 
 
-def filled_agent(overrides: Sequence[str], memory: int) -> tuple[PaperAgent, np.ndarray]:
+def filled_agent(overrides: Sequence[str], memory: int) -> tuple[PaperAgent, np.ndarray, Tensor, Tensor]:
     """The paper's agent after ``memory`` uniformly random env steps (fast renderer): replay and novelty memory hold
-    them (encoded in batches of 512), memory refreshed. Returns the agent and the last observation."""
+    them (encoded in batches of 512; a reservoir keeps a sample), memory refreshed. Returns the agent, the last
+    observation, and the latents (memory, d) and actions (memory,) of every step (the exact reference)."""
     cfg = compose_config(["env.renderer=fast", f"budget.warmup_steps={min(64, memory)}", *overrides])
     seed_everything(0, threads=torch.get_num_threads())
     env = make_env(cfg.env, memory + 10)
@@ -43,6 +46,7 @@ def filled_agent(overrides: Sequence[str], memory: int) -> tuple[PaperAgent, np.
     obs, _ = env.reset(seed=0)
     rng = np.random.default_rng(0)
     cur = agent.curiosity
+    latents, all_actions = [], []
     for start in range(0, memory, 512):
         block, actions = [], []
         for _ in range(min(512, memory - start)):
@@ -56,34 +60,40 @@ def filled_agent(overrides: Sequence[str], memory: int) -> tuple[PaperAgent, np.
             z = agent.model.encode(torch.as_tensor(np.stack(block)))
         a = torch.tensor(actions)
         cur.memory.add(cur.embed(z, a), keys=torch.arange(start, start + len(block)))
+        latents.append(z)
+        all_actions.append(a)
     cur.refresh()
-    return agent, obs
+    return agent, obs, torch.cat(latents), torch.cat(all_actions)
 
 
 def train_iter_ms(batches: Sequence[int], repeats: int) -> dict[int, float]:
     """Median ms of one training iteration of the default agent at each batch size (replay of 500 random steps)."""
     out = {}
     for batch in batches:
-        agent, _ = filled_agent([f"batch_size={batch}"], 500)
+        agent, *_ = filled_agent([f"batch_size={batch}"], 500)
         out[batch] = timed(agent._iteration, repeats)
     return out
 
 
-def planning_at(memory: int, repeats: int, queries: int = 2048) -> dict[str, float]:
+def planning_at(memory: int, repeats: int, queries: int = 2048, overrides: Sequence[str] = ()) -> dict[str, float]:
     """At a memory of ``memory`` rows: ms per planning step, ms per memory refresh, and the error of the configured
-    estimator's log ρ against exact KDE (chunked logsumexp over every row) at ``queries`` perturbed memory rows."""
-    agent, obs = filled_agent([], memory)
+    estimator's log ρ (``overrides``, e.g. a reservoir) against the exact KDE over every row with the bandwidth of
+    every row (chunked logsumexp), at ``queries`` perturbed rows."""
+    agent, obs, latents, actions = filled_agent(["planner.commit=1", *overrides], memory)  # every act() plans
     cur = agent.curiosity
-    big = memory >= 10_000  # a refresh re-encodes every row and refits the bandwidth (O(N^2)): time it once
+    big = len(cur.memory) >= 10_000  # a refresh re-encodes every stored row: time it once
     out = {"plan_ms": timed(lambda: agent.act(obs, memory), repeats),
            "refresh_ms": timed(cur.refresh, 1 if big else max(2, repeats // 5), warmup=0 if big else 1)}  # fmt: skip
     estimator = cur.estimator
-    mem = estimator.standardiser(cur.memory.tensor())
+    everything = estimator.standardiser(cur.embed(latents, actions))  # every row, as the memory now embeds them
+    exact = KDENovelty(bandwidth=estimator.multiplier, baseline="none", bandwidth_rule=estimator.rule)
+    exact.fit(everything)
     rng = torch.Generator().manual_seed(0)
-    rows = torch.randint(len(mem), (min(queries, len(mem)),), generator=rng)
-    query = mem[rows] + 0.5 * estimator.reward.bandwidth * torch.randn(len(rows), mem.shape[1], generator=rng)
-    exact = kde_log_density(query, mem, bandwidth=estimator.reward.bandwidth)
-    err = (estimator.reward.log_density(query) - exact).abs()
+    rows = torch.randint(len(everything), (min(queries, len(everything)),), generator=rng)
+    h = exact.reward.bandwidth
+    query = everything[rows] + 0.5 * h * torch.randn(len(rows), everything.shape[1], generator=rng)
+    err = (estimator.reward.log_density(query) - kde_log_density(query, everything, bandwidth=h)).abs()
     out["log_rho_error_median"] = float(err.median())
     out["log_rho_error_p99"] = float(err.quantile(0.99))
+    out["memory_rows"] = len(cur.memory)
     return out
