@@ -50,6 +50,16 @@ def test_matches_double_loop(b, n, d, h):
     torch.testing.assert_close(out, torch.tensor(_kde_loop(query, memory, h), dtype=F64), atol=1e-11, rtol=0)
 
 
+def test_narrow_kernels_whose_far_terms_are_floored_stay_exact():
+    """h = 0.05 over unit-spaced rows: most exponents are below −60 (raised to it before exp, for speed); the result
+    equals the double loop's exact (underflowing) sums to float64 rounding."""
+    query, memory = _rand(40, 3, seed=5), _rand(300, 3, seed=6)
+    out = kde_log_density(query, memory, bandwidth=0.05)
+    exponents = -torch.cdist(query, memory).pow(2) / (2 * 0.05**2)
+    assert (exponents < -60).float().mean() > 0.9  # the floor is exercised
+    torch.testing.assert_close(out, torch.tensor(_kde_loop(query, memory, 0.05), dtype=F64), atol=1e-11, rtol=1e-13)
+
+
 @pytest.mark.parametrize("h", [0.3, 1.0, 2.5])
 def test_matches_sklearn_with_normaliser(h):
     query, memory = _rand(50, 3, seed=3), _rand(200, 3, seed=4)
