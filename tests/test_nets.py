@@ -6,6 +6,7 @@ import pytest
 import torch
 
 from curiosity.nets import BackwardPredictor, ConvEncoder, MLPEncoder, QNetwork, ResidualTransition, RewardModel, one_hot
+from curiosity.nets.activations import FastTanh
 
 
 def n_params(module: torch.nn.Module) -> int:
@@ -37,14 +38,14 @@ def test_conv_encoder_layout_does_not_change_the_function():
 
 
 def nsrs_order(enc: ConvEncoder) -> torch.nn.Module:
-    """The same layers in NSRS's order: conv tanh conv tanh pool conv tanh pool flatten, then the head."""
-    f = enc.features
-    return torch.nn.Sequential(f[0], f[1], f[2], f[4], f[3], f[5], f[7], f[6], f[8], enc.head)
+    """The same layers in NSRS's order with torch's own tanh: conv tanh conv tanh pool conv tanh pool flatten, head."""
+    f, tanh = enc.features, torch.nn.Tanh
+    return torch.nn.Sequential(f[0], tanh(), f[2], tanh(), f[3], f[5], tanh(), f[6], f[8], enc.head)
 
 
 def test_conv_encoder_pooling_before_tanh_is_nsrs_function_and_gradient():
-    # our encoder max-pools before each tanh for speed; tanh is increasing, so the function and the gradient are
-    # NSRS's (tolerances: the same float ops in another order, any BLAS)
+    # our encoder max-pools before each tanh for speed, and computes tanh as 2σ(2x) − 1 (FastTanh); tanh is increasing,
+    # so the function and the gradient are NSRS's (tolerances: float ops in another order, any BLAS, tanh to ~2e-7)
     torch.manual_seed(0)
     for channels_last in (True, False):
         enc = ConvEncoder(channels_last=channels_last)
@@ -59,6 +60,19 @@ def test_conv_encoder_pooling_before_tanh_is_nsrs_function_and_gradient():
         g_theirs = torch.autograd.grad(theirs.square().sum(), list(enc.parameters()))
         for a, b in zip(g_ours, g_theirs, strict=True):
             torch.testing.assert_close(a, b, rtol=1e-4, atol=1e-6)
+
+
+def test_fast_tanh_is_tanh_to_float32_rounding_in_value_and_gradient():
+    x = torch.cat([torch.linspace(-30, 30, 4001), torch.tensor([0.0, 1e-8, -1e-8, 88.0, -88.0, 1e4, -1e4])])
+    x = x.requires_grad_()
+    ours, ref = FastTanh()(x), torch.tanh(x)
+    torch.testing.assert_close(ours, ref, rtol=0, atol=3e-7)  # absolute: 2σ(2x) − 1 cancels near 0
+    assert ours.abs().max() <= 1.0 and torch.isfinite(ours).all()
+    (g_ours,) = torch.autograd.grad(ours.square().sum(), x)
+    (g_ref,) = torch.autograd.grad(ref.square().sum(), x)
+    torch.testing.assert_close(g_ours, g_ref, rtol=0, atol=1e-6)
+    image = torch.randn(2, 8, 5, 5).contiguous(memory_format=torch.channels_last)
+    assert FastTanh()(image).is_contiguous(memory_format=torch.channels_last)
 
 
 def test_mlp_encoder_shape_and_layers():

@@ -8,6 +8,8 @@ from collections.abc import Sequence
 import torch
 from torch import Tensor, nn
 
+from curiosity.nets.activations import FastTanh
+
 
 def tanh_mlp(sizes: Sequence[int], *, final_activation: bool = False, dropout: float = 0.0) -> nn.Sequential:
     """A stack of Linear layers with tanh (and optional dropout) between them.
@@ -43,7 +45,8 @@ class ConvEncoder(nn.Module):
     19 → 8–13 ms on 1 thread, 11–16 → 8 ms on 2 threads. The output is the same function of the input either way
     (only strides differ; tested). Each max-pool runs before the tanh it follows in NSRS's order, the same function
     (tanh is increasing) at 1.55× the speed of forward+backward at B = 192 (one thread; ``runners.bench``; tested
-    against NSRS's order).
+    against NSRS's order). The tanh is :class:`~curiosity.nets.activations.FastTanh` (2σ(2x) − 1, the same function
+    to float32 rounding; a training iteration ≈ 10 % faster, measured under load).
 
     Args:
         in_channels: number of stacked frames C.
@@ -59,13 +62,13 @@ class ConvEncoder(nn.Module):
         # the same element; tanh then runs on 1/16 and 1/9 of the values (module indices, hence checkpoints, unchanged)
         self.features = nn.Sequential(
             nn.Conv2d(in_channels, 8, 3, padding=1),
-            nn.Tanh(),
+            FastTanh(),
             nn.Conv2d(8, 16, 3, padding=1),
             nn.MaxPool2d(4, padding=1),
-            nn.Tanh(),
+            FastTanh(),
             nn.Conv2d(16, 32, 3),
             nn.MaxPool2d(3),
-            nn.Tanh(),
+            FastTanh(),
             nn.Flatten(),
         )
         with torch.no_grad():
