@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import sys
 from pathlib import Path
 
 import pytest
@@ -94,6 +95,19 @@ def test_help_lists_the_groups_a_user_sets_and_the_launchers(tmp_path: Path) -> 
     assert res.returncode == 0, res.stderr[-2000:]
     assert "estimator: kde, knn" in res.stdout and "submitit_local" in res.stdout
     assert "schema/" not in res.stdout  # the typed schemas are internal
+
+
+def test_the_group_listing_is_made_only_for_the_help(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Hydra resolves the help template while composing every run's config; the listing (≈ 1 s) is skipped unless
+    the command line asks for the help (the --help run above shows it is made then)."""
+    from curiosity.config import resolvers
+
+    calls = []
+    monkeypatch.setattr(resolvers, "_groups_listing", lambda: calls.append(1) or "estimator: kde, knn")
+    monkeypatch.setattr(sys, "argv", ["runners.train", "seed=1", "budget=smoke"])
+    assert "--help" in resolvers.help_groups() and calls == []
+    monkeypatch.setattr(sys, "argv", ["runners.train", "--help"])
+    assert resolvers.help_groups() == "estimator: kde, knn" and calls == [1]
 
 
 def test_a_sampling_planner_says_so_in_the_log_and_the_summary(tmp_path: Path) -> None:
