@@ -13,10 +13,12 @@ import argparse
 import math
 import re
 import sys
+from pathlib import Path
 
 import pandas as pd
 
 from analysis.collect import existing_roots, load_incomplete, load_summaries
+from analysis.rows import distinguishing_keys, flat_config
 
 BY = ("env", "method", "variant")
 
@@ -36,9 +38,42 @@ def _incomplete_counts(incomplete: pd.DataFrame | None) -> dict[tuple, int]:
     return {tuple(k): len(g) for k, g in incomplete.groupby(list(BY), sort=True)}
 
 
+def split_code_defaults(summaries: pd.DataFrame, incomplete: pd.DataFrame | None = None) -> tuple[pd.DataFrame, pd.DataFrame | None]:
+    """``summaries`` (and ``incomplete``, the unfinished runs) with each (env, method, variant) group split where its
+    runs' configs differ: the same command line run by code with other defaults (e.g. the default agent before and
+    after a default changed) is not one method. The keys that differ (:func:`analysis.rows.distinguishing_keys` over
+    the saved configs, read with the values that reproduce older runs) are appended to ``method``:
+    ``ours-… [planner.commit=1]``."""
+    frames = [f.copy() for f in (summaries, incomplete) if f is not None and not f.empty and "run_dir" in f]
+    if not frames:
+        return summaries, incomplete
+    both = pd.concat([f[list(BY) + ["run_dir"]] for f in frames], ignore_index=True)
+    labels: dict[str, str] = {}
+    for _key, g in both.groupby(list(BY), sort=False):
+        dirs = [d for d in g["run_dir"] if (Path(d) / ".hydra" / "config.yaml").exists()]
+        if len(dirs) < 2:
+            continue
+        configs = {d: flat_config(d) for d in dirs}
+        keys = distinguishing_keys(list(configs.values()))
+        for d, cfg in configs.items():
+            if keys:
+                labels[d] = " [" + ", ".join(f"{k}={cfg.get(k, '–')}" for k in keys) + "]"
+    out = []
+    for f in (summaries, incomplete):
+        if f is not None and not f.empty and "run_dir" in f:
+            f = f.copy()
+            f["method"] = [f"{m}{labels[d]}" if d in labels else m for m, d in zip(f["method"], f["run_dir"], strict=True)]
+        out.append(f)
+    return out[0], out[1]
+
+
 def steps_table(summaries: pd.DataFrame, by: tuple[str, ...] = BY, incomplete: pd.DataFrame | None = None) -> pd.DataFrame:
     """One row per group of ``by``: seeds, reached, per-seed steps, mean ± SE, mean with censored runs at cap, the
-    command that runs the group, and how many of its runs are ``incomplete`` (rows of :func:`load_incomplete`)."""
+    command that runs the group, and how many of its runs are ``incomplete`` (rows of :func:`load_incomplete`).
+    With the default ``by``, runs of one command line whose configs differ are separate rows
+    (:func:`split_code_defaults`)."""
+    if by == BY:
+        summaries, incomplete = split_code_defaults(summaries, incomplete)
     unfinished = _incomplete_counts(incomplete) if by == BY else {}
     rows = []
     for key, g in summaries.groupby(list(by), sort=True):

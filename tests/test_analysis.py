@@ -64,6 +64,24 @@ def test_steps_table_lists_the_runs_not_finished(sweep: Path) -> None:
     assert "failed: " in res.stdout and "+foo=1" in res.stdout
 
 
+def test_steps_table_splits_one_command_run_with_other_code_defaults(sweep: Path) -> None:
+    """Seed 1 made as if by code whose default executes 5 planned actions: the same command line, not the same
+    method. It gets its own row, labelled by the key that differs; the others (saved before the key existed) read
+    with the value that reproduces them, and the stopped run stays counted with them."""
+    import yaml
+
+    config = next(sweep.rglob("seed=1/.hydra/config.yaml"))
+    cfg = yaml.safe_load(config.read_text())
+    cfg["planner"]["commit"] = 5
+    config.write_text(yaml.safe_dump(cfg))
+    res = analysis("steps_table", sweep, "--markdown")
+    assert res.returncode == 0, res.stderr
+    assert "-mpc [planner.commit=1] | `python -m runners.train -m planner.horizon=5 planner.temperature=0 seed=0,2` " \
+           "| 2 / 2 (1 more not finished) | 365, 1452 |" in res.stdout
+    assert "-mpc [planner.commit=5] | `python -m runners.train planner.horizon=5 planner.temperature=0 seed=1` " \
+           "| 1 / 1 | 1855 |" in res.stdout
+
+
 def test_profile_of_a_sweep_root_profiles_each_run_finished_or_not(sweep: Path) -> None:
     res = analysis("profile", sweep)
     assert res.returncode == 0, res.stderr
