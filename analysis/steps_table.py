@@ -38,33 +38,36 @@ def _incomplete_counts(incomplete: pd.DataFrame | None) -> dict[tuple, int]:
     return {tuple(k): len(g) for k, g in incomplete.groupby(list(BY), sort=True)}
 
 
-def split_code_defaults(summaries: pd.DataFrame, incomplete: pd.DataFrame | None = None) -> tuple[pd.DataFrame, pd.DataFrame | None]:
+def split_code_defaults(
+    summaries: pd.DataFrame, incomplete: pd.DataFrame | None = None
+) -> tuple[pd.DataFrame, pd.DataFrame | None]:
     """``summaries`` (and ``incomplete``, the unfinished runs) with each (env, method, variant) group split where its
     runs' configs differ: the same command line run by code with other defaults (e.g. the default agent before and
     after a default changed) is not one method. The keys that differ (:func:`analysis.rows.distinguishing_keys` over
     the saved configs, read with the values that reproduce older runs) are appended to ``method``:
     ``ours-… [planner.commit=1]``."""
-    frames = [f.copy() for f in (summaries, incomplete) if f is not None and not f.empty and "run_dir" in f]
+    def usable(f: pd.DataFrame | None) -> bool:
+        return f is not None and not f.empty and "run_dir" in f
+
+    frames = [f[[*BY, "run_dir"]] for f in (summaries, incomplete) if usable(f)]
     if not frames:
         return summaries, incomplete
-    both = pd.concat([f[list(BY) + ["run_dir"]] for f in frames], ignore_index=True)
     labels: dict[str, str] = {}
-    for _key, g in both.groupby(list(BY), sort=False):
+    for _key, g in pd.concat(frames, ignore_index=True).groupby(list(BY), sort=False):
         dirs = [d for d in g["run_dir"] if (Path(d) / ".hydra" / "config.yaml").exists()]
-        if len(dirs) < 2:
-            continue
-        configs = {d: flat_config(d) for d in dirs}
-        keys = distinguishing_keys(list(configs.values()))
-        for d, cfg in configs.items():
-            if keys:
-                labels[d] = " [" + ", ".join(f"{k}={cfg.get(k, '–')}" for k in keys) + "]"
-    out = []
-    for f in (summaries, incomplete):
-        if f is not None and not f.empty and "run_dir" in f:
-            f = f.copy()
-            f["method"] = [f"{m}{labels[d]}" if d in labels else m for m, d in zip(f["method"], f["run_dir"], strict=True)]
-        out.append(f)
-    return out[0], out[1]
+        configs = {d: flat_config(d) for d in dirs} if len(dirs) > 1 else {}
+        keys = distinguishing_keys(list(configs.values())) if configs else []
+        for d, cfg in configs.items() if keys else ():
+            labels[d] = " [" + ", ".join(f"{k}={cfg.get(k, '–')}" for k in keys) + "]"
+
+    def relabel(f: pd.DataFrame | None) -> pd.DataFrame | None:
+        if not usable(f):
+            return f
+        f = f.copy()
+        f["method"] = [f"{m}{labels[d]}" if d in labels else m for m, d in zip(f["method"], f["run_dir"], strict=True)]
+        return f
+
+    return relabel(summaries), relabel(incomplete)
 
 
 def steps_table(summaries: pd.DataFrame, by: tuple[str, ...] = BY, incomplete: pd.DataFrame | None = None) -> pd.DataFrame:

@@ -53,6 +53,15 @@ def parse(argv: list[str] | None = None) -> argparse.Namespace:
     return args
 
 
+def _by_memory(at: dict[int, dict[str, float]]) -> dict[str, Any]:
+    """:func:`planning_at`'s results per memory size N as the JSON's ``plan_step_ms``, ``refresh_ms`` and
+    ``novelty_log_rho_error`` {N: …}."""
+    return {"plan_step_ms": {n: v["plan_ms"] for n, v in at.items()},
+            "refresh_ms": {n: v["refresh_ms"] for n, v in at.items()},
+            "novelty_log_rho_error": {n: {"median": v["log_rho_error_median"], "p99": v["log_rho_error_p99"]}
+                                      for n, v in at.items()}}  # fmt: skip
+
+
 def measure(args: argparse.Namespace, seed_dir: Path) -> dict[str, Any]:
     default_batch = 64
     res: dict[str, Any] = {"machine": machine(), "quick": args.quick}
@@ -62,18 +71,11 @@ def measure(args: argparse.Namespace, seed_dir: Path) -> dict[str, Any]:
     base = speedup_vs(args.baseline_commit, default_batch, args.repeats, args.threads, rounds=1 if args.quick else 2)
     res["train_iter_baseline"] = base
     res["train_iter_speedup_vs_baseline"] = base["speedup"]
-    at = {n: planning_at(n, args.repeats) for n in args.memory}
-    res["plan_step_ms"] = {n: v["plan_ms"] for n, v in at.items()}
-    res["refresh_ms"] = {n: v["refresh_ms"] for n, v in at.items()}
-    res["novelty_log_rho_error"] = {n: {"median": v["log_rho_error_median"], "p99": v["log_rho_error_p99"]}
-                                    for n, v in at.items()}  # fmt: skip
+    res.update(_by_memory({n: planning_at(n, args.repeats) for n in args.memory}))
     size = args.reservoir
     sampled = {n: planning_at(n, args.repeats, overrides=["memory_mode=reservoir", f"memory_size={size}"])
                for n in args.memory if 0 < size < n}  # fmt: skip
-    res["reservoir"] = {"size": size, "plan_step_ms": {n: v["plan_ms"] for n, v in sampled.items()},
-                        "refresh_ms": {n: v["refresh_ms"] for n, v in sampled.items()},
-                        "novelty_log_rho_error": {n: {"median": v["log_rho_error_median"], "p99": v["log_rho_error_p99"]}
-                                                  for n, v in sampled.items()}}  # fmt: skip
+    res["reservoir"] = {"size": size, **_by_memory(sampled)}
     sweep = ["budget=smoke", "budget.max_steps=70"] if args.quick else ["budget=smoke"]
     res["sweep"] = sweep_speedup(sweep)
     res["sweep_speedup_2_jobs"] = res["sweep"]["speedup"]
