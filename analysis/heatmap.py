@@ -87,8 +87,8 @@ def scores(agent: Any, obs: np.ndarray) -> dict[str, np.ndarray]:
     with agent.model.evaluating():
         z = agent.model.encode(torch.as_tensor(obs))
         n, actions = z.shape[0], range(agent.model.n_actions)
-        novelty = agent.curiosity.novelty(z, torch.zeros(n, dtype=torch.long), z)
-        terms = [agent.curiosity.imagined_terms(z, torch.full((n,), a, dtype=torch.long), z) for a in actions]
+        novelty = agent.novelty.novelty(z, torch.zeros(n, dtype=torch.long), z)
+        terms = [agent.intrinsic.imagined_terms(z, torch.full((n,), a, dtype=torch.long), z) for a in actions]
         intrinsic = torch.stack([torch.stack(list(t.values())).sum(0) for t in terms]).mean(0)
     return {"novelty": novelty.numpy(), "intrinsic": intrinsic.numpy()}
 

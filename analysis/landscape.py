@@ -31,7 +31,9 @@ from curiosity.runtime.restore import RestoreError, restore_run
 
 def _variants(agent, bandwidths: list[float], k: int) -> dict[str, Callable[[Tensor], Tensor]]:
     """Novelty functions of standardised latents: KDE per bandwidth multiplier, and kNN, fitted to the memory."""
-    cur = agent.curiosity
+    cur = agent.novelty
+    if cur is None:
+        raise RestoreError("the landscape needs a run whose intrinsic reward has a latent novelty term")
     keys = cur.memory.keys().numpy()
     z = cur._encode_stored(keys)
     mean, std = z.mean(0), z.std(0, correction=0).clamp_min(1e-8)

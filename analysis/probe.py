@@ -36,7 +36,7 @@ def probe_run(run_dir: str | Path, states: int = 8, every: int = 5) -> list[dict
     for i in range(states):
         with model.evaluating():
             z0 = model.encode(torch.as_tensor(obs).unsqueeze(0))[0]
-            out.append(probe_model(agent.planner, z0, model.next, agent._reward_fn(), agent.curiosity.imagined_terms,
+            out.append(probe_model(agent.planner, z0, model.next, agent._reward_fn(), agent.intrinsic.imagined_terms,
                                    agent.simulator, agent.simulator.root(env, obs), model.encode))  # fmt: skip
         for _ in range(every if i + 1 < states else 0):
             obs, _, terminated, _, _ = env.step(agent.act(obs, step))

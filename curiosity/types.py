@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import torch
 from torch import Tensor
@@ -18,6 +18,9 @@ class TransitionBatch:
         next_obs: (B, *obs_shape) float observations o_{t+1}.
         rewards: (B,) float extrinsic rewards r_t.
         terminateds: (B,) float in {0, 1}; 1 where o_{t+1} is terminal.
+        z: (B, d) latents of o_t from the agent's encoder, or None (intrinsic rewards on latents read them).
+        z_next: (B, d) latents of o_{t+1}, or None.
+        index: (B,) long global transition indices in the replay (the env step of each), or None.
     """
 
     obs: Tensor
@@ -25,12 +28,23 @@ class TransitionBatch:
     next_obs: Tensor
     rewards: Tensor
     terminateds: Tensor
+    z: Tensor | None = None
+    z_next: Tensor | None = None
+    index: Tensor | None = None
 
     def __len__(self) -> int:
         return int(self.act.shape[0])
 
     def to(self, device: torch.device | str) -> TransitionBatch:
-        return TransitionBatch(*(t.to(device) for t in (self.obs, self.act, self.next_obs, self.rewards, self.terminateds)))
+        """The same transitions on ``device`` (indices stay on the host)."""
+        moved = {k: None if v is None else v.to(device)
+                 for k, v in (("obs", self.obs), ("act", self.act), ("next_obs", self.next_obs), ("rewards", self.rewards),
+                              ("terminateds", self.terminateds), ("z", self.z), ("z_next", self.z_next))}  # fmt: skip
+        return TransitionBatch(**moved, index=self.index)
+
+    def with_latents(self, z: Tensor, z_next: Tensor) -> TransitionBatch:
+        """The same transitions carrying latents z (B, d) of o_t and z_next (B, d) of o_{t+1}."""
+        return replace(self, z=z, z_next=z_next)
 
 
 @dataclass

@@ -9,13 +9,17 @@ import numpy as np
 import pytest
 import torch
 
-from curiosity.agents.curiosity import LatentCuriosity
 from curiosity.agents.paper import PaperAgent, build_world_model
+from curiosity.agents.world_model import WorldModel
 from curiosity.config import build
+from curiosity.intrinsic.base import IntrinsicContext
+from curiosity.intrinsic.latent_novelty import LatentNovelty
+from curiosity.intrinsic.prediction_error import PredictionError
 from curiosity.novelty.estimators import KDENovelty, KNNNovelty
 from curiosity.novelty.memory import EmbeddingMemory
 from curiosity.replay import ReplayBuffer
 from curiosity.runtime.loop import run
+from curiosity.types import TransitionBatch
 from tests.conftest import compose_cfg
 
 FAST = ["env.renderer=fast", "progress=false", "budget=smoke", "budget.max_steps=80", "budget.warmup_steps=40"]
@@ -67,13 +71,21 @@ def test_world_model_dropout_disagreement_is_zero_without_dropout() -> None:
     assert torch.all(build_world_model(cfg).dropout_disagreement(z, a, samples=16) > 0)
 
 
-def _curiosity(novelty_input: str, alpha: float = 0.5) -> LatentCuriosity:
+def _context(model: WorldModel, replay: ReplayBuffer, warmup_steps: int) -> IntrinsicContext:
+    def encode(obs: torch.Tensor) -> torch.Tensor:
+        with model.evaluating():
+            return model.encode(obs)
+
+    return IntrinsicContext(n_actions=3, obs_shape=(6,), latent_dim=4, warmup_steps=warmup_steps, replay=replay,
+                            encode=encode, model=model)  # fmt: skip
+
+
+def _novelty(novelty_input: str) -> LatentNovelty:
     cfg = compose_cfg(["env.obs=state", "encoder=mlp"])
     model = build_world_model(cfg)
     replay = ReplayBuffer(100, (6,))
-    cur = LatentCuriosity(model, KNNNovelty(k=1, normalise=False), replay, EmbeddingMemory(), n_actions=3,
-                          novelty_input=novelty_input, action_scale=2.0, alpha=alpha, warmup_steps=4,
-                          standardise=False)  # fmt: skip
+    cur = LatentNovelty(KNNNovelty(k=1, normalise=False), EmbeddingMemory(), _context(model, replay, 4),
+                        input=novelty_input, action_scale=2.0, standardise=False)  # fmt: skip
     rng = np.random.default_rng(0)
     obs = rng.normal(size=6).astype(np.float32)
     for t in range(8):
@@ -87,33 +99,40 @@ def _curiosity(novelty_input: str, alpha: float = 0.5) -> LatentCuriosity:
 
 
 def test_state_action_novelty_sees_the_action() -> None:
-    cur = _curiosity("state_action", alpha=0.0)
+    cur = _novelty("state_action")
     y = cur.memory.tensor()
-    assert y.shape == (8, cur.model.encoder(torch.zeros(1, 6)).shape[1] + 3)
+    assert y.shape == (8, cur.encode(torch.zeros(1, 6)).shape[1] + 3)
     z = y[:1, :-3]  # a stored state, with the action it was stored with (0) and another (1)
-    assert float(cur.novelty(z, torch.tensor([0]), None)) == pytest.approx(0.0, abs=1e-6)
+    assert float(cur.novelty(z, torch.tensor([0]), z)) == pytest.approx(0.0, abs=1e-6)
     query = cur.embed(z, torch.tensor([1]))
     assert torch.equal(query[0, -3:], torch.tensor([0.0, 2.0, 0.0]))  # action_scale * onehot
     expected = (y - query).norm(dim=1).min()  # k = 1: distance to the nearest stored pair
-    assert float(cur.novelty(z, torch.tensor([1]), None)) == pytest.approx(float(expected), rel=1e-5)
+    assert float(cur.novelty(z, torch.tensor([1]), z)) == pytest.approx(float(expected), rel=1e-5)
     assert float(expected) > 0
 
 
 def test_state_novelty_scores_the_state_reached() -> None:
-    cur = _curiosity("state", alpha=0.0)
+    cur = _novelty("state")
     z = cur.memory.tensor()
     assert float(cur.novelty(z[:1] + 100.0, torch.tensor([0]), z[:1])) == pytest.approx(0.0, abs=1e-6)
 
 
 def test_prediction_error_bonus_is_used_before_it_is_updated() -> None:
-    cur = _curiosity("state", alpha=1.0)
-    z, a = cur.memory.tensor()[:2], torch.tensor([0, 1])
-    before = cur.pe_real.mean
-    r, logs = cur.from_latents(z, a, z + 1.0)
-    assert cur.pe_real.mean == before  # computing does not move the running mean
-    err = torch.tensor(logs["intrinsic/pe_error"])
-    cur.observe_latents(z, a, z + 1.0)
-    assert cur.pe_real.mean != before and torch.isfinite(r).all() and err > 0
+    cfg = compose_cfg(["env.obs=state", "encoder=mlp"])
+    model = build_world_model(cfg)
+    pe = PredictionError(_context(model, ReplayBuffer(10, (6,)), 4))
+    z, a = torch.randn(2, cfg.internal_dim), torch.tensor([0, 1])
+    batch = TransitionBatch(torch.zeros(2, 6), a, torch.zeros(2, 6), torch.zeros(2), torch.zeros(2), z=z, z_next=z + 1.0,
+                            index=torch.tensor([10, 11]))  # fmt: skip
+    before = pe.real.mean
+    r = pe.compute(batch)
+    assert pe.real.mean == before  # computing does not move the running mean
+    logs = pe.observe(batch)
+    assert pe.real.mean != before and torch.isfinite(r).all() and logs["intrinsic/pe_error"] > 0
+    early = TransitionBatch(*(getattr(batch, k) for k in ("obs", "act", "next_obs", "rewards", "terminateds")), z=z,
+                            z_next=z + 1.0, index=torch.tensor([2, 3]))  # fmt: skip
+    after = pe.real.mean
+    assert pe.observe(early) == {} and pe.real.mean == after  # the warm-up (index < 4) is not folded in
 
 
 def test_agent_state_dict_round_trip_gives_the_same_actions(tmp_path: Path) -> None:
@@ -139,8 +158,8 @@ def test_refresh_takes_the_random_phase_reference_from_the_memory() -> None:
     cfg = compose_cfg(["env.obs=state", "encoder=mlp"])
     model = build_world_model(cfg)
     replay = ReplayBuffer(100, (6,))
-    cur = LatentCuriosity(model, KDENovelty(bandwidth=1.0, bandwidth_rule="fixed"), replay, EmbeddingMemory(),
-                          n_actions=3, novelty_input="state_action", warmup_steps=4)  # fmt: skip
+    cur = LatentNovelty(KDENovelty(bandwidth=1.0, bandwidth_rule="fixed"), EmbeddingMemory(), _context(model, replay, 4),
+                        input="state_action")  # fmt: skip
     rng = np.random.default_rng(1)
     obs = rng.normal(size=6).astype(np.float32)
     for t in range(10):
@@ -199,7 +218,7 @@ def test_planner_commit_executes_the_chosen_sequence_before_planning_again() -> 
         nonlocal plans
         plans += 1
         out = plan(*args, **kwargs)
-        chosen.extend(agent.planner.last_sequence)
+        chosen.extend(out.sequence)
         return out
 
     agent.planner.plan = counting_plan

@@ -9,8 +9,8 @@ import pytest
 import torch
 from sklearn.neighbors import NearestNeighbors
 
-from curiosity.baselines.icm import ICM
-from curiosity.baselines.rnd import RND
+from curiosity.intrinsic.icm import ICM
+from curiosity.intrinsic.rnd import RND
 from curiosity.config import build
 from curiosity.info.regularisers import GaussianPotentialRegulariser
 from curiosity.intrinsic.base import IntrinsicReward
@@ -43,11 +43,12 @@ def test_nsrs_uses_its_own_parts_whatever_the_groups() -> None:
     cfg = compose_cfg(["baseline=nsrs", "entropy=renyi", "estimator=kde", "planner=mpc", "env.obs=state", "encoder=mlp"])
     agent = build(cfg.baseline, cfg=cfg)
     assert isinstance(agent.planner, QTreePlanner) and agent.planner.depth == 5 and agent.planner.gamma == 0.8
-    assert isinstance(agent.curiosity.estimator, NSRSKNNNovelty) and agent.curiosity.estimator.k == 5
+    assert agent.novelty is not None
+    assert isinstance(agent.novelty.estimator, NSRSKNNNovelty) and agent.novelty.estimator.k == 5
     assert isinstance(agent.regulariser, GaussianPotentialRegulariser) and agent.regulariser.t == 2.0
     assert isinstance(agent.optimizer, torch.optim.RMSprop)
     assert agent.optimizer.defaults["lr"] == 2.5e-4 and agent.optimizer.defaults["alpha"] == 0.9
-    assert agent.curiosity.novelty_input == "state" and agent.curiosity.alpha == 0.0 and agent.q is not None
+    assert agent.novelty.input == "state" and agent.intrinsic.weights == {"novelty": 1.0, "pe": 0.0} and agent.q is not None
     assert agent.model.reward_model is None and agent.cfg.n_step == 1 and agent.cfg.batch_size == 64
 
 
@@ -63,6 +64,8 @@ def test_nsrs_knn_novelty_matches_a_nearest_neighbour_oracle() -> None:
 
 @pytest.mark.parametrize("baseline", ["icm", "rnd"])
 def test_q_baselines_build_their_intrinsic_module(baseline: str) -> None:
-    agent = build(compose_cfg([f"baseline={baseline}"]).baseline, cfg=compose_cfg([f"baseline={baseline}"]))
-    assert isinstance(agent.intrinsic, IntrinsicReward)
-    assert isinstance(agent.intrinsic, ICM if baseline == "icm" else RND)
+    cfg = compose_cfg([f"baseline={baseline}"])
+    agent = build(cfg.baseline, cfg=cfg)
+    assert isinstance(agent.intrinsic, IntrinsicReward) and cfg.intrinsic.name == baseline  # baseline=X picks intrinsic=X
+    assert list(agent.intrinsic.terms) == [baseline] and agent.intrinsic.weights == {baseline: 1.0}
+    assert isinstance(agent.intrinsic.terms[baseline], ICM if baseline == "icm" else RND)

@@ -19,6 +19,7 @@ PUBLIC_GROUPS = {
     "entropy": {"gaussian_potential", "renyi", "renyi_mi", "none"},
     "estimator": {"kde", "knn"},
     "backward": {"off", "on"},
+    "intrinsic": {"hybrid", "novelty", "pe", "icm", "rnd"},
     "baseline": {"none", "icm", "rnd", "nsrs", "random"},
     "planner": {"mpc", "qtree"},
     "budget": {"smoke", "quick", "paper"},
@@ -35,11 +36,14 @@ def test_public_groups_and_options_exist() -> None:
 
 @pytest.mark.parametrize(("group", "option"), group_options())
 def test_every_option_composes_and_validates(group: str, option: str) -> None:
-    extra = {("encoder", "mlp"): ["env.obs=state"], ("env", "chain"): ["encoder=mlp"]}.get((group, option), [])
+    extra = {("encoder", "mlp"): ["env.obs=state"], ("env", "chain"): ["encoder=mlp"],
+             ("intrinsic", "pe"): ["pe_imagined=ensemble", "transition_ensemble=2"],
+             ("intrinsic", "icm"): ["intrinsic.terms.icm.input=latent"],
+             ("intrinsic", "rnd"): ["intrinsic.terms.rnd.input=latent"]}.get((group, option), [])  # the planner imagines
     cfg = compose_cfg([f"{group}={option}", *extra])
     resolved = OmegaConf.to_container(cfg, resolve=True)
     assert isinstance(resolved, dict)
-    if group in {"env", "entropy", "estimator", "backward", "planner", "budget", "baseline", "encoder"}:
+    if group in {"env", "entropy", "estimator", "backward", "planner", "budget", "baseline", "encoder", "intrinsic"}:
         assert cfg[group].name == option
     validate(cfg)
 
@@ -140,9 +144,12 @@ def test_bad_ranges_name_seed(arg: str) -> None:
         (["planner.horizon=6", "planner.max_candidates=700"], "allowed: planner.horizon <= 5"),
         (["planner=qtree", "planner.horizon=11"], "planner.horizon=11: a depth-11 tree has 3^11 = 177147 leaves"),
         (["baseline=nsrs", "baseline.settings.planner.horizon=0"], "baseline.settings.planner.horizon=0: must be"),
-        (["baseline=icm", "baseline.intrinsic.lr=abc"], "baseline.intrinsic.lr='abc': must be a learning rate > 0"),
+        (["baseline=icm", "intrinsic.terms.icm.lr=-1"], "intrinsic.terms.icm.lr=-1.0: must be a learning rate > 0"),
         (["baseline=rnd", "baseline.gamma=1.5"], "baseline.gamma=1.5: must be a discount in [0, 1]"),
         (["env.obs=state", "encoder=mlp", "encoder.hidden=[64,0]"], "encoder.hidden=[64, 0]: must be"),
+        (["intrinsic=rnd"], "intrinsic=rnd: no term scores the planner's imagined latent steps; allowed:"),
+        (["intrinsic=pe"], "intrinsic=pe: no term scores the planner's imagined latent steps"),
+        (["baseline=icm", "intrinsic=hybrid"], "intrinsic=hybrid: the pe term needs the paper agent's latent world model"),
     ],
 )
 def test_pairings_and_planner_sizes_are_checked(overrides: list[str], message: str) -> None:

@@ -45,7 +45,7 @@ def test_acting_learning_and_resuming_create_tensors_only_on_the_configured_devi
         torch.set_default_device(None)
     device = resolve_device("cpu")
     assert all(p.device == device for p in agent.model.parameters())
-    assert agent.curiosity.memory.tensor().device == device
+    assert agent.novelty.memory.tensor().device == device
 
 
 def test_resolve_and_move() -> None:

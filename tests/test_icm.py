@@ -8,8 +8,8 @@ import pytest
 import torch
 from torch import nn
 
-from curiosity.baselines import ICM
-from curiosity.baselines.nets import make_feature_net
+from curiosity.intrinsic.icm import ICM
+from curiosity.intrinsic.nets import make_feature_net
 from curiosity.intrinsic.base import IntrinsicReward
 from curiosity.types import TransitionBatch
 from tests.conftest import random_batch

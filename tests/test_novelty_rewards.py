@@ -7,17 +7,9 @@ import math
 import pytest
 import torch
 
-from curiosity.novelty import (
-    BASELINES,
-    KDENoveltyReward,
-    PredictionErrorBonus,
-    hybrid_intrinsic_reward,
-    kde_log_density,
-    kde_reward_none,
-    kde_reward_scalar,
-    prediction_error_bonus,
-    squared_prediction_error,
-)
+from curiosity.intrinsic.mixture import hybrid_intrinsic_reward
+from curiosity.intrinsic.prediction_error import PredictionErrorBonus, prediction_error_bonus, squared_prediction_error
+from curiosity.novelty import BASELINES, KDENoveltyReward, kde_log_density, kde_reward_none, kde_reward_scalar
 
 F64 = torch.float64
 E = math.exp
@@ -147,7 +139,8 @@ def test_hydra_instantiate():
 
     obj = instantiate({"_target_": "curiosity.novelty.KDENoveltyReward", "bandwidth": 0.5, "baseline": "zscore"})
     assert isinstance(obj, KDENoveltyReward) and obj.baseline == "zscore" and obj.bandwidth == 0.5
-    pe = instantiate({"_target_": "curiosity.novelty.PredictionErrorBonus", "average": "ema", "ema_decay": 0.9})
+    target = "curiosity.intrinsic.prediction_error.PredictionErrorBonus"
+    pe = instantiate({"_target_": target, "average": "ema", "ema_decay": 0.9})
     assert isinstance(pe, PredictionErrorBonus) and pe.average == "ema"
 
 

@@ -8,7 +8,7 @@ import pytest
 import torch
 
 from curiosity.nets import QNetwork, ResidualTransition, one_hot
-from curiosity.planning import MPCPlanner, QTreePlanner
+from curiosity.planning import MPCPlanner, Planner, PlanRequest, QTreePlanner
 
 # ----------------------------------------------------------------------------- MPC toy model
 OFFSET = torch.tensor([1.0, 0.0, -1.0], dtype=torch.float64)
@@ -49,10 +49,10 @@ def test_mpc_low_temperature_picks_the_best_sequence(temperature):
     expected = brute_force_returns(z0, seqs, toy_step, toy_reward, zero_intrinsic, 0.9, 1.0)
     best = seqs[int(expected.argmax())]
     assert best.tolist() == [0, 2, 2]  # greedy would take the bonus (action 2) now; raising z first pays more
-    action, info = planner.plan(z0, toy_step, toy_reward, zero_intrinsic, torch.Generator().manual_seed(0))
-    assert action == 0
-    assert info["best_score"] == pytest.approx(float(expected.max()))
-    assert info["chosen_score"] == pytest.approx(float(expected.max()))
+    plan = planner.plan(PlanRequest(z0, toy_step, zero_intrinsic, toy_reward, generator=torch.Generator().manual_seed(0)))
+    assert plan.action == 0 and plan.sequence == [0, 2, 2]
+    assert plan.info["best_score"] == pytest.approx(float(expected.max()))
+    assert plan.score == pytest.approx(float(expected.max()))
 
 
 def test_mpc_enumerates_all_sequences_lexicographically():
@@ -106,7 +106,7 @@ def first_action_counts(planner, z0, reward, draws):
     gen = torch.Generator().manual_seed(123)
     counts = torch.zeros(3)
     for _ in range(draws):
-        counts[planner.plan(z0, toy_step, reward, zero_intrinsic, gen)[0]] += 1
+        counts[planner.plan(PlanRequest(z0, toy_step, zero_intrinsic, reward, generator=gen)).action] += 1
     return counts
 
 
@@ -128,7 +128,8 @@ def test_mpc_samples_from_the_softmax():
     planner = MPCPlanner(horizon=1, temperature=1.0)
     counts = first_action_counts(planner, torch.tensor([0.0], dtype=torch.float64), log_weights, 3000)
     assert chi_square(counts, torch.tensor([1 / 6, 2 / 6, 3 / 6])) < 13.8
-    _, info = planner.plan(torch.zeros(1), toy_step, log_weights, zero_intrinsic, torch.Generator().manual_seed(0))
+    info = planner.plan(PlanRequest(torch.zeros(1), toy_step, zero_intrinsic, log_weights,
+                                    generator=torch.Generator().manual_seed(0))).info  # fmt: skip
     probs = torch.tensor([1 / 6, 2 / 6, 3 / 6])
     assert info["entropy"] == pytest.approx(float(-(probs * probs.log()).sum()), rel=1e-5)
 
@@ -188,7 +189,7 @@ def test_qtree_equals_recursive_brute_force(depth):
         expected = brute_force_tree(z0, step, novelty, qnet, depth, 0.8)
         edge = on_reached_state(novelty)
         torch.testing.assert_close(planner.values(z0, step, edge, qnet), expected)
-        assert planner.plan(z0, step, edge, qnet)[0] == int(expected.argmax())
+        assert planner.plan(PlanRequest(z0, step, edge, q_fn=qnet)).action == int(expected.argmax())
 
 
 def path_step(z, a):
@@ -210,7 +211,7 @@ def test_qtree_fixes_the_released_subtree_mixup():
     values = planner.values(z0, path_step, on_reached_state(path_novelty), zero_q)
     assert values.tolist() == pytest.approx([0.0, 0.0, 4.0])
     torch.testing.assert_close(values, brute_force_tree(z0, path_step, path_novelty, zero_q, 2, 0.8))
-    assert planner.plan(z0, path_step, on_reached_state(path_novelty), zero_q)[0] == 2
+    assert planner.plan(PlanRequest(z0, path_step, on_reached_state(path_novelty), q_fn=zero_q)).action == 2
     released = released_nsrs_values(z0, path_step, path_novelty, zero_q, 2, 0.8)
     assert int(released.argmax()) == 0  # the released ordering credits the novel leaf to a0 = 0
 
@@ -219,8 +220,8 @@ def test_qtree_levels_are_state_major_and_ties_go_low():
     planner = QTreePlanner(horizon=2, n_actions=3)
     children = planner.expand(torch.tensor([[0.0], [1.0]]), path_step)
     assert children[:, 0].tolist() == [0, 1, 2, 10, 11, 12]
-    action, info = planner.plan(torch.zeros(1), path_step, lambda z, a, zn: torch.zeros(zn.shape[0]), zero_q)
-    assert action == 0 and info["value_gap"] == 0.0
+    plan = planner.plan(PlanRequest(torch.zeros(1), path_step, lambda z, a, zn: torch.zeros(zn.shape[0]), q_fn=zero_q))
+    assert plan.action == 0 and plan.info["value_gap"] == 0.0 and plan.sequence == [0]
 
 
 def test_qtree_edge_reward_sees_parent_action_and_child() -> None:
@@ -240,3 +241,19 @@ def test_qtree_edge_reward_sees_parent_action_and_child() -> None:
     z, a, z_next = seen[0]
     assert torch.equal(z, torch.ones(3, 1)) and torch.equal(a, torch.arange(3))
     assert torch.equal(z_next[:, 0], torch.tensor([1.0, 2.0, 3.0]))  # exact: integer sums
+
+
+def test_both_planners_are_planners_and_declare_what_they_need():
+    """One ``plan(PlanRequest) -> Plan`` signature; a Q-function is declared (``needs_q``), and refused when missing."""
+    mpc, tree = MPCPlanner(horizon=2), QTreePlanner(horizon=2)
+    assert isinstance(mpc, Planner) and isinstance(tree, Planner)
+    assert (mpc.needs_q, tree.needs_q) == (False, True) and mpc.horizon == tree.horizon == 2
+    with pytest.raises(ValueError, match="needs a Q-function"):
+        tree.plan(PlanRequest(torch.zeros(1), path_step, lambda z, a, zn: torch.zeros(zn.shape[0])))
+    named = {"a": lambda z, a, zn: path_novelty(zn), "b": lambda z, a, zn: torch.zeros(zn.shape[0], dtype=zn.dtype)}
+
+    def terms(z, a, zn):
+        return {k: f(z, a, zn) for k, f in named.items()}
+
+    request = PlanRequest(torch.zeros(1, dtype=torch.float64), path_step, terms, q_fn=zero_q)
+    assert tree.plan(request).action == 2  # named terms are summed, as one tensor would be

@@ -65,12 +65,13 @@ OUT_OF_RANGE = dict([
     _out_of_range("planner.max_candidates", "0"), _out_of_range("planner.commit", "0"),
     _out_of_range("encoder.hidden", "[64,0]", *MLP),
     _out_of_range("baseline.epsilon", "2", *ICM), _out_of_range("baseline.gamma", "-0.5", *RND),
-    _out_of_range("baseline.intrinsic.lr", "0", *ICM), _out_of_range("baseline.intrinsic.eta", "-1", *ICM),
-    _out_of_range("baseline.intrinsic.beta", "2", *ICM), _out_of_range("baseline.intrinsic.loss_weight", "-1", *ICM),
-    _out_of_range("baseline.intrinsic.feature_dim", "0", *ICM), _out_of_range("baseline.intrinsic.out_dim", "0", *RND),
-    _out_of_range("baseline.intrinsic.gamma_int", "1.5", *RND), _out_of_range("baseline.intrinsic.obs_clip", "0", *RND),
+    _out_of_range("intrinsic.terms.icm.lr", "0", *ICM), _out_of_range("intrinsic.terms.icm.eta", "-1", *ICM),
+    _out_of_range("intrinsic.terms.icm.beta", "2", *ICM), _out_of_range("intrinsic.terms.icm.loss_weight", "-1", *ICM),
+    _out_of_range("intrinsic.terms.icm.feature_dim", "0", *ICM), _out_of_range("intrinsic.terms.rnd.out_dim", "0", *RND),
+    _out_of_range("intrinsic.terms.rnd.gamma_int", "1.5", *RND), _out_of_range("intrinsic.terms.rnd.obs_clip", "0", *RND),
     _out_of_range("transition_ensemble", "0"), _out_of_range("memory_refresh_drift", "-0.1"),
-    _out_of_range("probe_every", "-1"),
+    _out_of_range("probe_every", "-1"), _out_of_range("intrinsic.scale", "-1"),
+    _out_of_range("intrinsic.terms.rnd.lr", "0", *RND),
 ])  # fmt: skip
 
 OTHER = {

@@ -7,7 +7,7 @@ from typing import Any
 import pytest
 import torch
 
-from curiosity.baselines import RND
+from curiosity.intrinsic.rnd import RND
 from curiosity.intrinsic.base import IntrinsicReward
 from curiosity.types import TransitionBatch
 from tests.conftest import random_batch

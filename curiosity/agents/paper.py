@@ -15,27 +15,29 @@ import torch
 from omegaconf import DictConfig, OmegaConf
 
 from curiosity.agents.base import Agent
-from curiosity.agents.curiosity import CURIOSITY_KEYS, LatentCuriosity
 from curiosity.agents.q_learning import QLearner
 from curiosity.agents.representation import LOSS_KEYS, LossWeights, check_finite, encode_segments, representation_loss
 from curiosity.agents.schedule import TrainSchedule
 from curiosity.agents.world_model import WorldModel
 from curiosity.config.build import build, choice
 from curiosity.envs.simulator import Simulator, SimStates
+from curiosity.intrinsic.base import IntrinsicContext
+from curiosity.intrinsic.latent_novelty import LatentNovelty
+from curiosity.intrinsic.mixture import Mixture
 from curiosity.nets.backward import BackwardPredictor
 from curiosity.nets.reward import RewardModel
 from curiosity.nets.transition import ResidualTransition, TransitionEnsemble
-from curiosity.novelty.memory import EmbeddingMemory
+from curiosity.planning.mpc import MPCPlanner
 from curiosity.planning.probe import probe_keys, probe_model
+from curiosity.planning.protocols import Plan, Planner, PlanRequest
 from curiosity.planning.rollout import SimulatorRollout
 from curiosity.replay import ReplayBuffer
 from curiosity.runtime.device import resolve_device, to_device
+from curiosity.types import TransitionBatch
 
 AGENT_KEYS = ("intrinsic/reward", "losses/q", "train/iterations", "planner/score", "planner/entropy",
-              "planner/first_action_entropy", "planner/spread/score", "planner/spread/novelty", "planner/spread/pe",
-              "planner/spread/reward", "planner/noise", "planner/noise_flip", "memory/drift", "memory/refreshed",
-              "intrinsic/pe_estimate_corr",
-              "timing/train_ms", "timing/refresh_ms", "timing/plan_ms", "timing/probe_ms")  # fmt: skip
+              "planner/first_action_entropy", "planner/spread/score", "planner/spread/reward", "planner/noise",
+              "planner/noise_flip", "timing/train_ms", "timing/plan_ms", "timing/probe_ms")  # fmt: skip
 # run means of these planner/probe columns go to summary.json ("agent")
 SUMMARY_KEYS = ("planner/first_action_entropy", "planner/noise", "planner/noise_flip", "probe/effect_ratio/1",
                 "probe/effect_ratio/3", "probe/spearman", "probe/agree", "memory/drift", "memory/refreshed",
@@ -77,34 +79,35 @@ class PaperAgent(Agent):
         self.weights = LossWeights(transition=cfg.transition_coef, reward=cfg.reward_coef, backward=cfg.backward.coef,
                                    sigma_b=cfg.backward.sigma_b, normalised_transition=cfg.normalised_transition,
                                    detach_targets=cfg.detach_targets)  # fmt: skip
-        self.planner = build(cfg.planner)
+        self.planner: Planner = build(cfg.planner)
         self.q = (QLearner(self.model.encoder, cfg.internal_dim, self.n_actions, gamma=cfg.planner.gamma,
                            target_every=cfg.q_target_every, huber=cfg.q_huber)
-                  if getattr(self.planner, "uses_q", False) else None)  # fmt: skip
+                  if self.planner.needs_q else None)  # fmt: skip
         if self.q is not None:
             self.q.to(self.device)
         params = list(self.model.parameters()) + (list(self.q.q.parameters()) if self.q else [])
         self.optimizer = build(cfg.optimizer, params=params)
         self.replay = ReplayBuffer(cfg.replay_capacity, obs_shape_of(cfg.env), pixel_uint8=self.obs_pixels)
-        memory = EmbeddingMemory(mode=choice(cfg.memory_mode), reservoir_size=cfg.memory_size, seed=cfg.seed)
-        self.curiosity = LatentCuriosity(
-            self.model, build(cfg.estimator), self.replay, memory, n_actions=self.n_actions,
-            novelty_input=choice(cfg.novelty_input), action_scale=cfg.action_scale, alpha=cfg.hybrid_alpha,
-            pe_average=choice(cfg.pe_average), pe_eps=cfg.pe_eps, dropout_samples=cfg.pe_dropout_samples,
-            warmup_steps=cfg.budget.warmup_steps, standardise=cfg.standardise_latents,
-            pe_imagined=choice(cfg.pe_imagined),
-        )  # fmt: skip
+        context = IntrinsicContext(n_actions=self.n_actions, obs_shape=obs_shape_of(cfg.env), latent_dim=cfg.internal_dim,
+                                   warmup_steps=cfg.budget.warmup_steps, seed=int(cfg.seed), device=self.device,
+                                   replay=self.replay, encode=self._encode_eval, model=self.model)  # fmt: skip
+        self.intrinsic: Mixture = build(cfg.intrinsic, context=context)
+        if not self.intrinsic.imaginable:
+            raise ValueError(f"intrinsic={cfg.intrinsic.name}: no term scores imagined latent steps, which the planner "
+                             "needs; allowed: a latent reward (novelty, pe with pe_imagined=dropout|ensemble, "
+                             "icm/rnd with input=latent)")  # fmt: skip
+        self.novelty: LatentNovelty | None = self.intrinsic.term(LatentNovelty)  # its memory, for analysis
         b = cfg.budget
         self.schedule = TrainSchedule(b.warmup_steps, b.train_every, b.iters_per_train, b.ramp, b.early_stop_every,
                                       b.early_stop_threshold)  # fmt: skip
         self.rng = np.random.default_rng([int(cfg.seed), 2])
         self.generator = torch.Generator().manual_seed(int(cfg.seed))
         self.oracle = choice(OmegaConf.select(cfg, "planner.model", default="learned")) == "oracle"
-        self.probe_every = int(cfg.probe_every) if self.q is None else 0  # the probe scores with the MPC planner
+        self.probe_every = int(cfg.probe_every) if isinstance(self.planner, MPCPlanner) else 0  # it scores with MPC
         first = tuple(f"planner/p_first/{a}" for a in range(self.n_actions))
         probe = probe_keys(cfg.planner.horizon) if self.probe_every else ()
-        self.metric_keys = (*LOSS_KEYS, *CURIOSITY_KEYS, *AGENT_KEYS, *first, *probe,
-                            *getattr(self.curiosity.estimator, "log_keys", ()))  # fmt: skip
+        spread = tuple(f"planner/spread/{name}" for name in self.intrinsic.terms)  # each term's spread across candidates
+        self.metric_keys = (*LOSS_KEYS, *self.intrinsic.log_keys, *AGENT_KEYS, *spread, *first, *probe)
         self._plan_logs: dict[str, float] = {}
         self.env: Any = None
         self.simulator: Simulator | None = None
@@ -120,8 +123,7 @@ class PaperAgent(Agent):
     def summary(self) -> dict[str, Any]:
         """Run means of the planner, probe and memory columns (``SUMMARY_KEYS``) and how imagined steps were made."""
         means = {k: total / n for k, (total, n) in self.totals.items() if n}
-        return {"planner_model": "oracle" if self.oracle else "learned", "pe_imagined": self.curiosity.pe_imagined_kind,
-                "means": means}  # fmt: skip
+        return {"planner_model": "oracle" if self.oracle else "learned", **self.intrinsic.summary(), "means": means}
 
     def _tally(self, logs: dict[str, float]) -> None:
         for key in SUMMARY_KEYS:
@@ -146,6 +148,11 @@ class PaperAgent(Agent):
         self._latent = (np.array(obs, copy=True), z)
         return z
 
+    def _encode_eval(self, obs: torch.Tensor) -> torch.Tensor:
+        """E(o) in eval mode without gradient: (B, *obs_shape) -> (B, d) (what intrinsic rewards re-encode with)."""
+        with self.model.evaluating():
+            return self.model.encode(obs)
+
     def _reward_fn(self) -> Any:
         return self.model.reward if self.model.reward_model is not None else None
 
@@ -153,26 +160,25 @@ class PaperAgent(Agent):
         assert self.simulator is not None, "attach_env() was not called"
         return self.simulator.root(self.env, obs)
 
-    def _plan(self, z0: torch.Tensor, obs: np.ndarray) -> tuple[int, dict[str, float]]:
-        cur, model = self.curiosity, self.model
-        if self.q is not None:
-            return self.planner.plan(z0, model.next, cur.imagined, self.q.values)
+    def _plan(self, z0: torch.Tensor, obs: np.ndarray) -> Plan:
         rollout = None
         if self.oracle:
             assert self.simulator is not None, "attach_env() was not called"
-            rollout = SimulatorRollout(self.simulator, self._root(obs), z0, model.encode)
-        return self.planner.plan(z0, model.next, self._reward_fn(), cur.imagined_terms, self.generator, rollout=rollout)
+            rollout = SimulatorRollout(self.simulator, self._root(obs), z0, self.model.encode)
+        return self.planner.plan(PlanRequest(
+            z0, self.model.next, self.intrinsic.imagined_terms, reward_fn=self._reward_fn(),
+            q_fn=self.q.values if self.q is not None else None, generator=self.generator, rollout=rollout))
 
     def _score_noise(self, z0: torch.Tensor, obs: np.ndarray) -> dict[str, float]:
         """Two fresh evaluations of the (stochastic) scores of every candidate: their noise and whether the best first
         action flips between them. Only for learned-model MPC with full enumeration and a stochastic term."""
         planner = self.planner
-        if self.q is not None or self.oracle or not self.curiosity.stochastic:
+        if not isinstance(planner, MPCPlanner) or self.oracle or not self.intrinsic.stochastic:
             return {}
         if planner.n_actions**planner.horizon > planner.max_candidates:
             return {}
         seqs = planner.candidates()
-        g1, g2 = (planner.scores(z0, seqs, self.model.next, self._reward_fn(), self.curiosity.imagined_terms)
+        g1, g2 = (planner.scores(z0, seqs, self.model.next, self._reward_fn(), self.intrinsic.imagined_terms)
                   for _ in range(2))  # fmt: skip
         flip = int(seqs[int(g1.argmax()), 0]) != int(seqs[int(g2.argmax()), 0])
         return {"planner/noise": float((g1 - g2).std(correction=0)) / 2**0.5, "planner/noise_flip": float(flip)}
@@ -180,9 +186,10 @@ class PaperAgent(Agent):
     def _probe(self, z0: torch.Tensor, obs: np.ndarray, step: int) -> dict[str, float]:
         if not self.probe_every or (step - self.cfg.budget.warmup_steps) % self.probe_every:
             return {}
+        assert isinstance(self.planner, MPCPlanner), "the probe scores with the MPC planner"
         start = time.perf_counter()
         assert self.simulator is not None, "attach_env() was not called"
-        out = probe_model(self.planner, z0, self.model.next, self._reward_fn(), self.curiosity.imagined_terms,
+        out = probe_model(self.planner, z0, self.model.next, self._reward_fn(), self.intrinsic.imagined_terms,
                           self.simulator, self._root(obs), self.model.encode)  # fmt: skip
         out["timing/probe_ms"] = 1e3 * (time.perf_counter() - start)
         return out
@@ -194,63 +201,46 @@ class PaperAgent(Agent):
         start = time.perf_counter()
         z0 = self.encode_obs(obs)
         with self.model.evaluating():
-            action, info = self._plan(z0, obs)
+            plan = self._plan(z0, obs)
             plan_ms = 1e3 * (time.perf_counter() - start)
-            logs = {"planner/score": info.get("chosen_score", info.get("best_value", 0.0)),
-                    "planner/entropy": info.get("entropy", 0.0), "timing/plan_ms": plan_ms}  # fmt: skip
-            logs.update({f"planner/{k}": v for k, v in info.items()
+            logs = {"planner/score": plan.score, "planner/entropy": plan.info.get("entropy", 0.0),
+                    "timing/plan_ms": plan_ms}  # fmt: skip
+            logs.update({f"planner/{k}": v for k, v in plan.info.items()
                          if k.startswith(("spread/", "p_first/")) or k == "first_action_entropy"})  # fmt: skip
             with torch.random.fork_rng(devices=[]):  # diagnostics draw dropout masks but never change the run's stream
                 logs.update(self._score_noise(z0, obs))
                 logs.update(self._probe(z0, obs, step))
         self._tally(logs)
         self._plan_logs = logs
-        if self.planner.commit > 1:
-            self.queue = list(self.planner.last_sequence[1 : self.planner.commit])
-        return action
+        self.queue = list(plan.sequence[1 : self.planner.commit])
+        return plan.action
 
     # ------------------------------------------------------------------ learning
     def observe(self, obs: np.ndarray, action: int, reward: float, next_obs: np.ndarray, terminated: bool,
                 step: int) -> dict[str, float]:  # fmt: skip
+        """Store the transition; log its intrinsic reward (each term's, and their mixture) once the reward is ready;
+        fold it into the reward's memory and statistics (``observe``: refreshes the novelty memory when due); train."""
         self.replay.add(obs, action, reward, next_obs, terminated)
-        z_t = self.encode_obs(obs)
-        z = torch.stack([z_t, self.encode_obs(next_obs)])
-        cur, a = self.curiosity, torch.tensor([action], device=self.device)
-        cur.add(z[0], action, self.replay.total_added - 1)
+        z = torch.stack([self.encode_obs(obs), self.encode_obs(next_obs)])
+        dev = self.device
+        batch = TransitionBatch(torch.as_tensor(obs, device=dev).unsqueeze(0), torch.tensor([action], device=dev),
+                                torch.as_tensor(next_obs, device=dev).unsqueeze(0), torch.tensor([reward], device=dev),
+                                torch.tensor([float(terminated)], device=dev), z=z[:1], z_next=z[1:],
+                                index=torch.tensor([self.replay.total_added - 1], device="cpu"))  # fmt: skip
         logs: dict[str, float] = dict(self._plan_logs)
         self._plan_logs = {}
-        if cur.ready:
-            r_int, parts = cur.from_latents(z[:1], a, z[1:])
-            cur.observe_latents(z[:1], a, z[1:])
-            logs.update(parts, **{"intrinsic/reward": float(r_int[0])})
-            corr = cur.pe_estimate_corr() if (step + 1) % self.cfg.log_every == 0 else None
-            if corr is not None:
-                logs["intrinsic/pe_estimate_corr"] = corr
-        if self._refresh_due(step, logs):
-            start = time.perf_counter()
-            cur.refresh()
-            logs.update(getattr(cur.estimator, "logs", {}), **{"timing/refresh_ms": 1e3 * (time.perf_counter() - start)})
-            logs["memory/refreshed"] = 1.0
-        elif cur.ready:
-            logs["memory/refreshed"] = 0.0
+        intrinsic = self.intrinsic
+        if intrinsic.ready:
+            with torch.no_grad():
+                terms = intrinsic.compute_terms(batch)
+            logs.update({f"intrinsic/{name}": float(v.mean()) for name, v in terms.items()})
+            logs["intrinsic/reward"] = float(intrinsic.combine(terms)[0])
+        logs.update(intrinsic.observe(batch))
         self._tally({k: v for k, v in logs.items() if not k.startswith(("planner/", "probe/"))})  # act() tallied those
         iterations = self.schedule.iterations(step)
         if iterations:
             logs.update(self._train(iterations))
         return logs
-
-    def _refresh_due(self, step: int, logs: dict[str, float]) -> bool:
-        """Every ``memory_refresh_every`` env steps from the end of the warm-up, and in between whenever the memory's
-        drift (:meth:`LatentCuriosity.drift`, logged as ``memory/drift``) exceeds ``memory_refresh_drift`` (> 0)."""
-        since = step + 1 - self.cfg.budget.warmup_steps
-        if since < 0:
-            return False
-        if since % self.cfg.memory_refresh_every == 0:
-            return True
-        if self.cfg.memory_refresh_drift > 0 and self.curiosity.ready:
-            logs["memory/drift"] = self.curiosity.drift()
-            return logs["memory/drift"] > self.cfg.memory_refresh_drift
-        return False
 
     def _train(self, iterations: int) -> dict[str, float]:
         start = time.perf_counter()
@@ -276,9 +266,12 @@ class PaperAgent(Agent):
         seg = self.replay.sample_segments(self.cfg.batch_size, self.cfg.n_step, self.rng).to(self.device)
         enc = encode_segments(self.model, seg)
         loss, logs = representation_loss(self.model, seg, enc, self.regulariser, self.weights)
+        first = seg.first_step().with_latents(enc.z[:, 0].detach(), enc.z[:, 1].detach())
+        logs.update(self.intrinsic.update(first))  # rewards that learn (ICM, RND) take their step
         if self.q is not None:
             z, z_next, act = enc.z[:, 0], enc.z[:, 1], seg.act[:, 0]
-            r_int, _ = self.curiosity.from_latents(z.detach(), act, z_next.detach())
+            with torch.no_grad():
+                r_int = self.intrinsic.compute(first)
             q_loss = self.q.loss(z, act, seg.rewards[:, 0] + r_int, z_next, seg.obs[:, 1], seg.terminateds[:, 0])
             check_finite("losses/q", q_loss)
             loss = loss + self.cfg.q_coef * q_loss
@@ -300,7 +293,7 @@ class PaperAgent(Agent):
         return {
             "model": self.model.state_dict(), "q": self.q.state_dict() if self.q else None,
             "optimizer": self.optimizer.state_dict(), "replay": self.replay.state_dict(),
-            "curiosity": self.curiosity.state_dict(), "schedule": self.schedule.state_dict(),
+            "intrinsic": self.intrinsic.state_dict(), "schedule": self.schedule.state_dict(),
             "rng": self.rng.bit_generator.state, "generator": self.generator.get_state(), "totals": self.totals,
             "queue": list(self.queue),
         }  # fmt: skip
@@ -312,9 +305,18 @@ class PaperAgent(Agent):
             self.q.load_state_dict(state["q"])
         self.optimizer.load_state_dict(state["optimizer"])
         self.replay.load_state_dict(state["replay"])
-        self.curiosity.load_state_dict(to_device(state["curiosity"], self.device))
+        saved = state["intrinsic"] if "intrinsic" in state else legacy_intrinsic_state(state["curiosity"])
+        self.intrinsic.load_state_dict(to_device({k: v for k, v in saved.items() if k in self.intrinsic.terms}, self.device))
         self.schedule.load_state_dict(state["schedule"])
         self.rng.bit_generator.state = state["rng"]
         self.generator.set_state(state["generator"])
         self.totals = {k: list(v) for k, v in state.get("totals", {}).items()}
         self.queue = list(state.get("queue", []))  # checkpoints before planner.commit had none
+
+
+def legacy_intrinsic_state(old: dict[str, Any]) -> dict[str, Any]:
+    """A checkpoint's ``curiosity`` state from before the intrinsic rewards were separate terms, as the hybrid's
+    ``{novelty, pe}`` states (so a run saved then resumes now)."""
+    novelty = {k: old[k] for k in ("memory", "ready", "z_mean", "z_std", "estimator")}
+    pe = {"real": old["pe_real"], "imagined": old["pe_imagined"], "pairs": old.get("pe_pairs", [])}
+    return {"novelty": novelty, "pe": pe}

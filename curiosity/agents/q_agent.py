@@ -9,7 +9,6 @@ warm-up and with the same training schedule (``budget``) as every other agent, s
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -22,7 +21,8 @@ from curiosity.agents.q_learning import QLearner
 from curiosity.agents.representation import check_finite
 from curiosity.agents.schedule import TrainSchedule
 from curiosity.config.build import build, choice
-from curiosity.intrinsic.base import IntrinsicReward
+from curiosity.intrinsic.base import IntrinsicContext
+from curiosity.intrinsic.mixture import Mixture
 from curiosity.replay import ReplayBuffer
 from curiosity.types import TransitionBatch
 
@@ -33,14 +33,13 @@ class IntrinsicQAgent(Agent):
     """Greedy double-DQN on r_ext + r_int.
 
     Args:
-        cfg: the run config (``internal_dim``, ``encoder``, ``optimizer``, ``batch_size``, ``budget``, ...).
-        intrinsic: a factory ``intrinsic(obs_shape=...) -> IntrinsicReward`` (e.g. ``ICM.from_obs_shape``).
+        cfg: the run config (``internal_dim``, ``encoder``, ``optimizer``, ``batch_size``, ``budget``, ``intrinsic``
+            (the reward, built with this agent's encoder and replay; no world model, so no prediction-error term), ...).
         epsilon: probability of a uniformly random action after the warm-up.
         gamma: discount of the Q-learning.
     """
 
-    def __init__(self, cfg: DictConfig, intrinsic: Callable[..., IntrinsicReward], epsilon: float = 0.0,
-                 gamma: float = 0.8) -> None:  # fmt: skip
+    def __init__(self, cfg: DictConfig, epsilon: float = 0.0, gamma: float = 0.8) -> None:
         self.cfg, self.label = cfg, str(cfg.method_label)
         self.n_actions, self.epsilon = int(cfg.env.n_actions), float(epsilon)
         obs_shape = obs_shape_of(cfg.env)
@@ -48,13 +47,32 @@ class IntrinsicQAgent(Agent):
         self.q = QLearner(self.encoder, cfg.internal_dim, self.n_actions, gamma=gamma, target_every=cfg.q_target_every,
                           huber=cfg.q_huber)  # fmt: skip
         self.optimizer = build(cfg.optimizer, params=[*self.encoder.parameters(), *self.q.q.parameters()])
-        self.intrinsic = intrinsic(obs_shape=obs_shape)
         self.replay = ReplayBuffer(cfg.replay_capacity, obs_shape, pixel_uint8=choice(cfg.env.obs) == "pixels")
+        context = IntrinsicContext(n_actions=self.n_actions, obs_shape=obs_shape, latent_dim=cfg.internal_dim,
+                                   warmup_steps=cfg.budget.warmup_steps, seed=int(cfg.seed), replay=self.replay,
+                                   encode=self._encode_eval)  # fmt: skip
+        self.intrinsic: Mixture = build(cfg.intrinsic, context=context)
         b = cfg.budget
         self.schedule = TrainSchedule(b.warmup_steps, b.train_every, b.iters_per_train, b.ramp)
         self.rng = np.random.default_rng([int(cfg.seed), 3])
         self.metric_keys = Q_AGENT_KEYS + self.intrinsic.log_keys
         self._q_max = 0.0
+
+    @torch.no_grad()
+    def _encode_eval(self, obs: torch.Tensor) -> torch.Tensor:
+        """The Q encoder's latents, (B, *obs_shape) -> (B, internal_dim), in eval mode without gradient."""
+        was_training = self.encoder.training
+        self.encoder.eval()
+        try:
+            return self.encoder(obs)
+        finally:
+            self.encoder.train(was_training)
+
+    def _with_latents(self, batch: TransitionBatch) -> TransitionBatch:
+        """The batch with the encoder's latents of o_t and o_{t+1} when the reward reads latents."""
+        if not self.intrinsic.needs_latents:
+            return batch
+        return batch.with_latents(self._encode_eval(batch.obs), self._encode_eval(batch.next_obs))
 
     def act(self, obs: np.ndarray, step: int) -> int:
         if self.epsilon > 0 and self.rng.random() < self.epsilon:
@@ -69,9 +87,15 @@ class IntrinsicQAgent(Agent):
         self.replay.add(obs, action, reward, next_obs, terminated)
         fresh = TransitionBatch(torch.as_tensor(obs).unsqueeze(0), torch.tensor([action]),
                                 torch.as_tensor(next_obs).unsqueeze(0), torch.tensor([reward], dtype=torch.float32),
-                                torch.tensor([float(terminated)]))  # fmt: skip
-        logs = {"intrinsic/reward": float(self.intrinsic(fresh)[0]), "q/max": self._q_max}
-        self.intrinsic.observe(fresh)
+                                torch.tensor([float(terminated)]),
+                                index=torch.tensor([self.replay.total_added - 1]))  # fmt: skip
+        fresh = self._with_latents(fresh)
+        logs = {"q/max": self._q_max}
+        if self.intrinsic.ready:
+            terms = self.intrinsic.compute_terms(fresh)
+            logs.update({f"intrinsic/{name}": float(v.mean()) for name, v in terms.items()})
+            logs["intrinsic/reward"] = float(self.intrinsic.scale * self.intrinsic.combine(terms)[0])
+        logs.update(self.intrinsic.observe(fresh))
         iterations = self.schedule.iterations(step)
         if iterations:
             start = time.perf_counter()
@@ -84,9 +108,9 @@ class IntrinsicQAgent(Agent):
         return logs
 
     def _iteration(self) -> dict[str, float]:
-        batch = self.replay.sample_transitions(self.cfg.batch_size, self.rng)
+        batch = self._with_latents(self.replay.sample_transitions(self.cfg.batch_size, self.rng))
         with torch.no_grad():
-            r_int = self.intrinsic(batch)
+            r_int = self.intrinsic(batch) if self.intrinsic.ready else torch.zeros_like(batch.rewards)
             z_next = self.encoder(batch.next_obs)
         loss = self.q.loss(self.encoder(batch.obs), batch.act, batch.rewards + r_int, z_next, batch.next_obs,
                            batch.terminateds)  # fmt: skip
@@ -106,7 +130,10 @@ class IntrinsicQAgent(Agent):
         self.encoder.load_state_dict(state["encoder"])
         self.q.load_state_dict(state["q"])
         self.optimizer.load_state_dict(state["optimizer"])
-        self.intrinsic.load_state_dict(state["intrinsic"])
+        saved = state["intrinsic"]
+        if "nets" in saved:  # saved before rewards were mixtures: the one reward's own state
+            saved = {next(iter(self.intrinsic.terms)): saved}
+        self.intrinsic.load_state_dict(saved)
         self.replay.load_state_dict(state["replay"])
         self.schedule.load_state_dict(state["schedule"])
         self.rng.bit_generator.state = state["rng"]

@@ -1,6 +1,2 @@
-"""Baseline intrinsic rewards behind :class:`~curiosity.intrinsic.base.IntrinsicReward`: ICM and RND (torch only)."""
-
-from curiosity.baselines.icm import ICM
-from curiosity.baselines.rnd import RND
-
-__all__ = ["ICM", "RND"]
+"""Baseline agents that are not the paper's: the uniformly random policy. (ICM and RND are intrinsic rewards, in
+:mod:`curiosity.intrinsic`; the Q agent they drive is :mod:`curiosity.agents.q_agent`.)"""

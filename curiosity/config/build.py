@@ -12,12 +12,21 @@ from omegaconf import DictConfig, OmegaConf
 METADATA_KEYS = ("name", "label")
 
 
-def build(node: DictConfig, **runtime: Any) -> Any:
-    """Instantiate a group node's ``_target_``, without its metadata keys, passing ``runtime`` keyword arguments."""
-    cfg = OmegaConf.to_container(node, resolve=True, enum_to_str=True)
+def _strip_metadata(cfg: Any) -> Any:
+    """The config without the metadata keys of every node that builds an object (has a ``_target_``)."""
+    if isinstance(cfg, dict):
+        return {k: _strip_metadata(v) for k, v in cfg.items() if not ("_target_" in cfg and k in METADATA_KEYS)}
+    if isinstance(cfg, list):
+        return [_strip_metadata(v) for v in cfg]
+    return cfg
+
+
+def build(node: DictConfig | dict[str, Any], **runtime: Any) -> Any:
+    """Instantiate a group node's ``_target_``, without its metadata keys (at every level, so a node may hold another
+    group's node, e.g. a novelty term its ``estimator``), passing ``runtime`` keyword arguments."""
+    cfg = OmegaConf.to_container(node, resolve=True, enum_to_str=True) if isinstance(node, DictConfig) else node
     assert isinstance(cfg, dict)
-    for key in METADATA_KEYS:
-        cfg.pop(key, None)
+    cfg = {k: v for k, v in _strip_metadata(cfg).items() if k not in METADATA_KEYS}
     # Runtime objects (a whole DictConfig, tensors) are passed to the built partial, not merged into the config.
     return instantiate(cfg, _partial_=True)(**runtime)
 

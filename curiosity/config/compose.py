@@ -87,7 +87,7 @@ def describe_compose_error(err: Exception, overrides: Sequence[str]) -> str:
 COMPOSE_ERRORS: tuple[type[Exception], ...] = (HydraException, OmegaConfBaseException)
 
 
-GROUPS = ("env", "encoder", "entropy", "estimator", "backward", "baseline", "planner", "budget")
+GROUPS = ("env", "encoder", "entropy", "estimator", "backward", "intrinsic", "baseline", "planner", "budget")
 
 
 # Keys added after runs were made, with the value that reproduces a run made before the key existed. A key's current

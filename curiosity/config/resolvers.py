@@ -53,7 +53,14 @@ def help_groups() -> str:
     return _groups_listing()
 
 
+def one_minus(value: float) -> float:
+    """``${one_minus:x}`` = 1 − x (the novelty weight of the hybrid, 1 − ``hybrid_alpha``)."""
+    return 1.0 - float(value)
+
+
 def register_resolvers() -> None:
-    """Register ``${run_variant:...}`` and ``${help_groups:}``; safe to call more than once (jobs share a process)."""
+    """Register ``${run_variant:...}``, ``${help_groups:}`` and ``${one_minus:...}``; safe to call more than once
+    (jobs share a process)."""
     OmegaConf.register_new_resolver("run_variant", run_variant, replace=True)
     OmegaConf.register_new_resolver("help_groups", help_groups, replace=True)
+    OmegaConf.register_new_resolver("one_minus", one_minus, replace=True)

@@ -208,6 +208,81 @@ class QTreeConfig:
     n_actions: int = "${env.n_actions}"  # type: ignore[assignment]
 
 
+# ---------------------------------------------------------------- intrinsic (the reward every agent explores with)
+class RewardInput(Enum):
+    obs = "obs"
+    latent = "latent"
+
+
+@dataclass
+class MixtureConfig:
+    """r_int = Σ_k weights[k] · terms[k]; each term a node below (its ``_target_`` takes the agent's ``context``)."""
+
+    name: str = MISSING
+    _target_: str = "curiosity.intrinsic.mixture.Mixture.from_config"
+    _recursive_: bool = False  # the mixture builds its terms, each with the agent's context
+    terms: Any = MISSING
+    weights: Any = MISSING
+    scale: float = 1.0
+
+
+@dataclass
+class LatentNoveltyTermConfig:
+    """Latent novelty (curiosity/intrinsic/latent_novelty.py); its keys follow the top-level ones by default."""
+
+    _target_: str = "curiosity.intrinsic.latent_novelty.LatentNovelty.from_context"
+    estimator: Any = "${estimator}"
+    input: NoveltyInput = "${novelty_input}"  # type: ignore[assignment]
+    action_scale: float = "${action_scale}"  # type: ignore[assignment]
+    standardise: bool = "${standardise_latents}"  # type: ignore[assignment]
+    memory_mode: MemoryMode = "${memory_mode}"  # type: ignore[assignment]
+    memory_size: int = "${memory_size}"  # type: ignore[assignment]
+    refresh_every: int = "${memory_refresh_every}"  # type: ignore[assignment]
+    refresh_drift: float = "${memory_refresh_drift}"  # type: ignore[assignment]
+    scale: float = 1.0
+
+
+@dataclass
+class PredictionErrorTermConfig:
+    """The prediction-error bonus (curiosity/intrinsic/prediction_error.py); keys follow the top-level ones."""
+
+    _target_: str = "curiosity.intrinsic.prediction_error.PredictionError.from_context"
+    imagined: PEImagined = "${pe_imagined}"  # type: ignore[assignment]
+    dropout_samples: int = "${pe_dropout_samples}"  # type: ignore[assignment]
+    average: Average = "${pe_average}"  # type: ignore[assignment]
+    eps: float = "${pe_eps}"  # type: ignore[assignment]
+    log_every: int = "${log_every}"  # type: ignore[assignment]
+    scale: float = 1.0
+
+
+@dataclass
+class ICMTermConfig:
+    """Pathak's ICM (curiosity/intrinsic/icm.py)."""
+
+    _target_: str = "curiosity.intrinsic.icm.ICM.from_context"
+    input: RewardInput = RewardInput.obs
+    feature_dim: int = 32
+    eta: float = 1.0
+    beta: float = 0.2
+    loss_weight: float = 10.0
+    lr: float = 1e-3
+    scale: float = 1.0
+
+
+@dataclass
+class RNDTermConfig:
+    """Burda's RND (curiosity/intrinsic/rnd.py)."""
+
+    _target_: str = "curiosity.intrinsic.rnd.RND.from_context"
+    input: RewardInput = RewardInput.obs
+    out_dim: int = 64
+    lr: float = 1e-4
+    gamma_int: float = 0.99
+    obs_clip: float = 5.0
+    observe_in_update: bool = False  # running statistics follow the env stream (the agent observes once per step)
+    scale: float = 1.0
+
+
 # ---------------------------------------------------------------- baseline (which agent runs)
 @dataclass
 class AgentConfig:
@@ -218,9 +293,8 @@ class AgentConfig:
 
 @dataclass
 class QAgentConfig(AgentConfig):
-    """ICM / RND: greedy double DQN on r_ext + r_int from ``intrinsic`` (a partial taking ``obs_shape``)."""
+    """ICM / RND: greedy double DQN on r_ext + r_int from the ``intrinsic`` group."""
 
-    intrinsic: Any = MISSING
     epsilon: float = 0.0
     gamma: float = 0.8
 
@@ -254,6 +328,7 @@ class Config:
     entropy: Any = MISSING
     estimator: Any = MISSING
     backward: BackwardConfig = MISSING
+    intrinsic: MixtureConfig = MISSING
     baseline: AgentConfig = MISSING
     planner: Any = MISSING
     budget: BudgetConfig = MISSING
@@ -313,6 +388,13 @@ _GROUP_SCHEMAS: dict[str, dict[str, type]] = {
     "estimator": {"kde": KDEConfig, "knn": KNNConfig},
     "backward": {"backward": BackwardConfig},
     "planner": {"mpc": MPCConfig, "qtree": QTreeConfig},
+    "intrinsic": {
+        "mixture": MixtureConfig,
+        "novelty": LatentNoveltyTermConfig,
+        "pe": PredictionErrorTermConfig,
+        "icm": ICMTermConfig,
+        "rnd": RNDTermConfig,
+    },
     "baseline": {"agent": AgentConfig, "q_agent": QAgentConfig, "nsrs": NSRSConfig},
     "budget": {"budget": BudgetConfig},
 }

@@ -81,14 +81,16 @@ RULES: list[Rule] = [
     ("encoder.hidden", lambda v: all(w >= 1 for w in v), "a list of layer widths >= 1"),
     ("baseline.epsilon", lambda v: 0 <= v <= 1, "an exploration probability in [0, 1]"),
     ("baseline.gamma", lambda v: 0 <= v <= 1, "a discount in [0, 1]"),
-    ("baseline.intrinsic.lr", lambda v: v > 0, "a learning rate > 0"),
-    ("baseline.intrinsic.eta", lambda v: v >= 0, "a number >= 0"),
-    ("baseline.intrinsic.beta", lambda v: 0 <= v <= 1, "a weight in [0, 1]"),
-    ("baseline.intrinsic.loss_weight", lambda v: v >= 0, "a number >= 0"),
-    ("baseline.intrinsic.feature_dim", lambda v: v >= 1, "an integer >= 1"),
-    ("baseline.intrinsic.out_dim", lambda v: v >= 1, "an integer >= 1"),
-    ("baseline.intrinsic.gamma_int", lambda v: 0 <= v <= 1, "a discount in [0, 1]"),
-    ("baseline.intrinsic.obs_clip", lambda v: v > 0, "a number > 0"),
+    ("intrinsic.terms.icm.lr", lambda v: v > 0, "a learning rate > 0"),
+    ("intrinsic.terms.icm.eta", lambda v: v >= 0, "a number >= 0"),
+    ("intrinsic.terms.icm.beta", lambda v: 0 <= v <= 1, "a weight in [0, 1]"),
+    ("intrinsic.terms.icm.loss_weight", lambda v: v >= 0, "a number >= 0"),
+    ("intrinsic.terms.icm.feature_dim", lambda v: v >= 1, "an integer >= 1"),
+    ("intrinsic.terms.rnd.lr", lambda v: v > 0, "a learning rate > 0"),
+    ("intrinsic.terms.rnd.out_dim", lambda v: v >= 1, "an integer >= 1"),
+    ("intrinsic.terms.rnd.gamma_int", lambda v: 0 <= v <= 1, "a discount in [0, 1]"),
+    ("intrinsic.terms.rnd.obs_clip", lambda v: v > 0, "a number > 0"),
+    ("intrinsic.scale", lambda v: v >= 0, "a number >= 0"),
 ]
 
 # The observations each encoder takes, and the largest tree a tree planner may expand at every env step.
@@ -125,6 +127,32 @@ def _cross_field_errors(cfg: DictConfig) -> list[str]:
             f"budget.max_steps={cfg.budget.max_steps}: must be > budget.warmup_steps={cfg.budget.warmup_steps}"
         )
     return errors
+
+
+def _intrinsic_errors(cfg: DictConfig) -> list[str]:
+    """The ``intrinsic`` reward must suit the agent: a planning agent needs a term that scores imagined latent steps;
+    the Q agent has no latent world model for the prediction-error term. Checked from the terms' classes."""
+    from hydra.utils import get_class, get_method  # imports the agents (torch): only once the config is read
+
+    from curiosity.agents.paper import PaperAgent
+    from curiosity.agents.q_agent import IntrinsicQAgent
+    from curiosity.intrinsic.base import IntrinsicReward
+
+    terms = OmegaConf.to_container(cfg.intrinsic.terms, resolve=True, enum_to_str=True)
+    assert isinstance(terms, dict)
+    classes: dict[str, type[IntrinsicReward]] = {}
+    for name, node in terms.items():
+        target = get_method(node["_target_"])
+        classes[name] = getattr(target, "__self__", target)  # a classmethod factory (from_context) or the class
+    agent = get_class(str(cfg.baseline._target_))
+    label = f"intrinsic={cfg.intrinsic.name}"
+    if issubclass(agent, PaperAgent) and not any(c.can_imagine(terms[n]) for n, c in classes.items()):
+        return [f"{label}: no term scores the planner's imagined latent steps; allowed: a term that does (novelty; pe "
+                "with pe_imagined=dropout or ensemble; icm or rnd with intrinsic.terms.<name>.input=latent)"]  # fmt: skip
+    if issubclass(agent, IntrinsicQAgent) and (model := [n for n, c in classes.items() if c.needs_model]):
+        return [f"{label}: the {', '.join(model)} term needs the paper agent's latent world model, which "
+                f"baseline={cfg.baseline.name} has not; allowed: intrinsic=novelty, icm or rnd"]  # fmt: skip
+    return []
 
 
 def _pairing_errors(cfg: DictConfig) -> list[str]:
@@ -216,6 +244,6 @@ def validate(cfg: DictConfig, rules: list[Rule] | None = None) -> None:
     """
     errors = _rule_errors(cfg, RULES if rules is None else rules) + _settings_errors(cfg)
     if not errors:
-        errors = _cross_field_errors(cfg) + _pairing_errors(cfg) + _planner_errors(cfg)
+        errors = _cross_field_errors(cfg) + _pairing_errors(cfg) + _planner_errors(cfg) + _intrinsic_errors(cfg)
     if errors:
         raise ConfigError(errors)

@@ -1,8 +1,9 @@
-"""Intrinsic rewards of the paper (§3.3): KDE novelty with a random-phase baseline, prediction-error bonus, hybrid.
+"""KDE novelty scores of the paper (§3.3) with a random-phase baseline.
 
-Every score is a named pure function; :class:`KDENoveltyReward` and :class:`PredictionErrorBonus` wrap them with the
-state they need (reference statistics, running mean), take constructor kwargs only (``hydra.utils.instantiate``
-friendly) and expose ``state_dict()`` / ``load_state_dict()``. Rewards are computed without gradient.
+Every score is a named pure function; :class:`KDENoveltyReward` wraps them with the state they need (reference
+statistics), takes constructor kwargs only (``hydra.utils.instantiate`` friendly) and exposes ``state_dict()`` /
+``load_state_dict()``. Scores are computed without gradient. The prediction-error bonus and the hybrid live in
+:mod:`curiosity.intrinsic`.
 """
 
 from __future__ import annotations
@@ -56,32 +57,6 @@ def kde_reward_zscore(log_rho: Tensor, mem_mean: Tensor | float, mem_std: Tensor
 def kde_reward_none(log_rho: Tensor) -> Tensor:
     """No baseline: r = −log ρ(y), (B,) -> (B,)."""
     return -log_rho
-
-
-def squared_prediction_error(pred: Tensor, target: Tensor) -> Tensor:
-    """e_b = ‖ŝ_b − s_b‖² summed (not averaged) over features, (B, d), (B, d) -> (B,), without gradient."""
-    if pred.shape != target.shape or pred.dim() != 2:
-        raise ValueError(f"pred and target must both be (B, d), got {tuple(pred.shape)} and {tuple(target.shape)}")
-    with torch.no_grad():
-        return (pred - target).pow(2).sum(dim=1)
-
-
-def prediction_error_bonus(error: Tensor, mean_error: float, *, eps: float = 1e-8) -> Tensor:
-    """Normalised prediction-error bonus (paper Eq. 10): r_pe = log(1 + e / (ē + ε)), (B,) -> (B,).
-
-    Args:
-        error: (B,) squared prediction errors e ≥ 0 (see :func:`squared_prediction_error`).
-        mean_error: running mean ē of the error from *before* this batch.
-        eps: ε > 0 guarding ē = 0.
-    """
-    return torch.log1p(error.detach() / (float(mean_error) + eps))
-
-
-def hybrid_intrinsic_reward(r_nov: Tensor, r_pe: Tensor, *, alpha: float = 0.5) -> Tensor:
-    """Hybrid intrinsic reward (paper Eq. 11): r_int = (1 − α) r_nov + α r_pe, α ∈ [0, 1], (B,), (B,) -> (B,)."""
-    if not 0.0 <= alpha <= 1.0:
-        raise ValueError(f"alpha must be in [0, 1], got {alpha}")
-    return (1.0 - alpha) * r_nov + alpha * r_pe
 
 
 class KDENoveltyReward:
@@ -187,66 +162,3 @@ class KDENoveltyReward:
             raise ValueError(f"state is for baseline={state['baseline']!r}, this object uses {self.baseline!r}")
         for k in ("reference", "log_rho0_bar", "mem_mean", "mem_std"):
             setattr(self, k, state[k])
-
-
-class PredictionErrorBonus:
-    """Prediction-error bonus r_pe = log1p(e / (ē + ε)) with a running mean ē, updated after use.
-
-    ``__call__(e)`` computes the reward with the ē from before the batch, then updates ē with the batch
-    (``compute`` and ``update`` do one half each, e.g. ``compute`` alone for imagined transitions).
-
-    Running mean (``average``):
-        ``"cumulative"``: the mean of every error seen so far, ē ← (c ē + Σ_b e_b) / (c + B), c = errors seen.
-        ``"ema"``: exponential moving average of batch means, ē ← β ē + (1 − β) mean_b e_b, β = ``ema_decay``.
-    In both, the first update sets ē to the first batch's mean; before it, ē = ``initial_mean``.
-
-    Args:
-        eps: ε > 0 in the denominator.
-        average: ``"cumulative"`` or ``"ema"``.
-        ema_decay: β ∈ [0, 1) for ``"ema"``.
-        initial_mean: ē used before any update.
-    """
-
-    def __init__(
-        self, eps: float = 1e-8, average: str = "cumulative", ema_decay: float = 0.99, initial_mean: float = 1.0
-    ) -> None:
-        if average not in ("cumulative", "ema"):
-            raise ValueError(f"average must be 'cumulative' or 'ema', got {average!r}")
-        if not 0.0 <= ema_decay < 1.0:
-            raise ValueError(f"ema_decay must be in [0, 1), got {ema_decay}")
-        self.eps = float(eps)
-        self.average = average
-        self.ema_decay = float(ema_decay)
-        self.mean = float(initial_mean)
-        self.count = 0
-
-    def compute(self, error: Tensor) -> Tensor:
-        """r_pe for squared errors (B,) -> (B,) with the current ē; does not update ē."""
-        return prediction_error_bonus(error, self.mean, eps=self.eps)
-
-    def update(self, error: Tensor) -> None:
-        """Fold a batch of squared errors (B,) into the running mean ē."""
-        e = error.detach().to(torch.float64).reshape(-1)
-        if e.numel() == 0:
-            return
-        if self.count == 0:
-            self.mean = float(e.mean())
-        elif self.average == "cumulative":
-            self.mean = (self.count * self.mean + float(e.sum())) / (self.count + e.numel())
-        else:
-            self.mean = self.ema_decay * self.mean + (1.0 - self.ema_decay) * float(e.mean())
-        self.count += e.numel()
-
-    def __call__(self, error: Tensor) -> Tensor:
-        """Reward with the ē from before this batch, then update ē: (B,) -> (B,)."""
-        reward = self.compute(error)
-        self.update(error)
-        return reward
-
-    def state_dict(self) -> dict[str, Any]:
-        """Running statistics: ``{"mean": ē, "count": errors seen}``."""
-        return {"mean": self.mean, "count": self.count}
-
-    def load_state_dict(self, state: dict[str, Any]) -> None:
-        """Restore the running statistics saved by :meth:`state_dict`."""
-        self.mean, self.count = float(state["mean"]), int(state["count"])

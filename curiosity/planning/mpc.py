@@ -2,15 +2,14 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from typing import ClassVar
 
 import torch
 from torch import Tensor
 
+from curiosity.planning.protocols import IntrinsicFn, Plan, PlanRequest, ScoreFn
 from curiosity.planning.rollout import LatentRollout, Rollout, StepFn
 
-ScoreFn = Callable[[Tensor, Tensor], Tensor]
-IntrinsicFn = Callable[[Tensor, Tensor, Tensor], Tensor | Mapping[str, Tensor]]
 TEMPERATURE_SCALES = ("absolute", "spread")
 PLANNER_MODELS = ("learned", "oracle")
 
@@ -40,10 +39,10 @@ class MPCPlanner:
         model: where imagined futures come from: ``learned`` (the world model) or ``oracle`` (the real simulator,
             rendered and encoded: the upper bound a learned model is measured against). The agent builds the rollout.
         commit: how many actions of the chosen sequence the agent executes before it plans again (1: replan at every
-            step, receding horizon); the planner keeps the chosen sequence in ``last_sequence``.
+            step, receding horizon); the agent executes that many actions of :attr:`Plan.sequence`.
     """
 
-    uses_q = False  # whether the agent must train a Q-function for this planner
+    needs_q: ClassVar[bool] = False
 
     def __init__(
         self,
@@ -61,7 +60,6 @@ class MPCPlanner:
         if not 1 <= commit <= horizon:
             raise ValueError(f"planner.commit must be in [1, planner.horizon={horizon}], got {commit}")
         self.commit = int(commit)
-        self.last_sequence: list[int] = []
         if horizon < 1 or n_actions < 1 or max_candidates < 1:
             raise ValueError("horizon, n_actions and max_candidates must be >= 1")
         if n_actions**horizon > max_candidates and not sample_candidates:
@@ -166,40 +164,26 @@ class MPCPlanner:
         """(A,) probability of each first action under the choice probabilities ``probs`` (N,) of ``seqs`` (N, H)."""
         return torch.zeros(self.n_actions, dtype=probs.dtype, device="cpu").index_add_(0, seqs[:, 0].cpu(), probs.cpu())
 
-    def plan(
-        self,
-        z0: Tensor,
-        step_fn: StepFn,
-        reward_fn: ScoreFn | None,
-        intrinsic_fn: IntrinsicFn,
-        generator: torch.Generator | None = None,
-        rollout: Rollout | None = None,
-    ) -> tuple[int, dict[str, float]]:
-        """Choose the first action of a sequence drawn from softmax(Ĝ/τ) (argmax for τ ≤ 0).
+    def plan(self, request: PlanRequest) -> Plan:
+        """Choose a sequence drawn from softmax(Ĝ/τ) (argmax for τ ≤ 0) at ``request.z0``.
 
-        Args:
-            z0: (d,) current latent.
-            step_fn: T(z (M, d), a (M,) long) -> (M, d), run in eval mode by the caller.
-            reward_fn: R(z, a) -> (M,), or None.
-            intrinsic_fn: r_int(z, a, z_next) -> (M,) or a mapping of named terms (see :meth:`score_terms`).
-            generator: RNG for candidate sampling and the softmax draw (CPU generator for CPU tensors).
-            rollout: where the futures come from; default the learned model through ``step_fn``.
+        Reads ``z0``, ``step_fn``, ``reward_fn``, ``intrinsic`` (one tensor, or named terms, see :meth:`score_terms`),
+        ``generator`` (candidate sampling and the softmax draw; CPU) and ``rollout``.
 
         Returns:
-            (action, info) with info keys ``best_score``, ``chosen_score``, ``entropy`` (nats, of the choice over
-            candidates; 0 for argmax), ``first_action_entropy`` (nats, of the first action's marginal),
-            ``p_first/<a>``, ``n_candidates``, ``spread/<term>`` (std across candidates of each term's return) and
-            ``spread/score``.
+            the chosen sequence, its Ĝ, and info keys ``best_score``, ``entropy`` (nats, of the choice over candidates;
+            0 for argmax), ``first_action_entropy`` (nats, of the first action's marginal), ``p_first/<a>``,
+            ``n_candidates``, ``spread/<term>`` (std across candidates of each term's return) and ``spread/score``.
         """
         with torch.no_grad():
-            seqs = self.candidates(generator)
-            terms = self.score_terms(z0, seqs, step_fn, reward_fn, intrinsic_fn, rollout)
+            seqs = self.candidates(request.generator)
+            terms = self.score_terms(request.z0, seqs, request.step_fn, request.reward_fn, request.intrinsic,
+                                     request.rollout)  # fmt: skip
             returns = _total(terms)
-            index, probs, entropy = self.choose(returns, generator)
+            index, probs, entropy = self.choose(returns, request.generator)
             first = self.first_action_probs(seqs, probs)
         info = {
             "best_score": float(returns.max()),
-            "chosen_score": float(returns[index]),
             "entropy": entropy,
             "first_action_entropy": float(-(first * first.clamp_min(1e-30).log()).sum()),
             "n_candidates": float(seqs.shape[0]),
@@ -207,8 +191,7 @@ class MPCPlanner:
             **{f"spread/{k}": float(v.std(correction=0)) for k, v in terms.items()},
             **{f"p_first/{a}": float(p) for a, p in enumerate(first)},
         }
-        self.last_sequence = [int(a) for a in seqs[index]]
-        return self.last_sequence[0], info
+        return Plan([int(a) for a in seqs[index]], float(returns[index]), info)
 
 
 def _total(terms: dict[str, Tensor]) -> Tensor:

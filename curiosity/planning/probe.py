@@ -22,7 +22,8 @@ from scipy.stats import spearmanr
 from torch import Tensor
 
 from curiosity.envs.simulator import Simulator, SimStates
-from curiosity.planning.mpc import IntrinsicFn, MPCPlanner, ScoreFn
+from curiosity.planning.mpc import MPCPlanner
+from curiosity.planning.protocols import IntrinsicFn, ScoreFn
 from curiosity.planning.rollout import LatentRollout, ReplayRollout, Rollout, SimulatorRollout, StepFn
 
 

@@ -3,13 +3,15 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import ClassVar
 
 import torch
 from torch import Tensor
 
-StepFn = Callable[[Tensor, Tensor], Tensor]
+from curiosity.planning.protocols import Plan, PlanRequest, QFn
+from curiosity.planning.rollout import StepFn
+
 EdgeRewardFn = Callable[[Tensor, Tensor, Tensor], Tensor]
-QFn = Callable[[Tensor], Tensor]
 
 
 class QTreePlanner:
@@ -30,13 +32,13 @@ class QTreePlanner:
         n_actions: A.
     """
 
-    uses_q = True  # whether the agent must train a Q-function for this planner
+    needs_q: ClassVar[bool] = True  # Q at the leaves: the agent trains one and passes it as ``PlanRequest.q_fn``
     commit = 1  # actions executed per search: the tree's value is for the first action only
 
     def __init__(self, horizon: int = 5, gamma: float = 0.8, n_actions: int = 3) -> None:
         if horizon < 1:
             raise ValueError("horizon (the tree depth) must be >= 1")
-        self.depth = horizon
+        self.depth = self.horizon = horizon
         self.gamma = gamma
         self.n_actions = n_actions
 
@@ -79,13 +81,24 @@ class QTreePlanner:
                 value = level + self.gamma * value.reshape(-1, self.n_actions).max(dim=1).values
         return value
 
-    def plan(self, z0: Tensor, step_fn: StepFn, intrinsic_fn: EdgeRewardFn, q_fn: QFn) -> tuple[int, dict[str, float]]:
-        """Greedy root action argmax_a V(a) (ties to the lowest index).
+    def plan(self, request: PlanRequest) -> Plan:
+        """Greedy root action argmax_a V(a) (ties to the lowest index) at ``request.z0``.
+
+        Reads ``z0``, ``step_fn``, ``intrinsic`` (one tensor per edge) and ``q_fn`` (required).
 
         Returns:
-            (action, info) with info keys ``best_value`` and ``value_gap`` (best minus runner-up; 0 with one action).
+            the action (a one-action sequence), its value V(a), and info key ``value_gap`` (best minus runner-up; 0
+            with one action).
         """
-        value = self.values(z0, step_fn, intrinsic_fn, q_fn)
+        if request.q_fn is None:
+            raise ValueError("the Q-tree planner needs a Q-function (PlanRequest.q_fn)")
+        intrinsic = request.intrinsic
+
+        def edge(z: Tensor, a: Tensor, z_next: Tensor) -> Tensor:
+            out = intrinsic(z, a, z_next)
+            return out if isinstance(out, Tensor) else torch.stack(list(out.values())).sum(0)
+
+        value = self.values(request.z0, request.step_fn, edge, request.q_fn)
         top = torch.topk(value, min(2, value.numel())).values
         gap = float(top[0] - top[1]) if top.numel() > 1 else 0.0
-        return int(torch.argmax(value)), {"best_value": float(top[0]), "value_gap": gap}
+        return Plan([int(torch.argmax(value))], float(top[0]), {"value_gap": gap})

@@ -45,7 +45,8 @@ def filled_agent(overrides: Sequence[str], memory: int) -> tuple[PaperAgent, np.
     agent = build(cfg.baseline, cfg=cfg)
     obs, _ = env.reset(seed=0)
     rng = np.random.default_rng(0)
-    cur = agent.curiosity
+    cur = agent.novelty
+    assert cur is not None, "the benchmark measures the latent novelty memory"
     latents, all_actions = [], []
     for start in range(0, memory, 512):
         block, actions = [], []
@@ -80,7 +81,8 @@ def planning_at(memory: int, repeats: int, queries: int = 2048, overrides: Seque
     estimator's log ρ (``overrides``, e.g. a reservoir) against the exact KDE over every row with the bandwidth of
     every row (chunked logsumexp), at ``queries`` perturbed rows."""
     agent, obs, latents, actions = filled_agent(["planner.commit=1", *overrides], memory)  # every act() plans
-    cur = agent.curiosity
+    cur = agent.novelty
+    assert cur is not None
     big = len(cur.memory) >= 10_000  # a refresh re-encodes every stored row: time it once
     out = {"plan_ms": timed(lambda: agent.act(obs, memory), repeats),
            "refresh_ms": timed(cur.refresh, 1 if big else max(2, repeats // 5), warmup=0 if big else 1)}  # fmt: skip

@@ -14,8 +14,9 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor, nn
 
-from curiosity.baselines.nets import make_feature_net, mlp
-from curiosity.intrinsic.base import IntrinsicReward
+from curiosity.intrinsic.base import IntrinsicContext, IntrinsicReward, latents_of
+from curiosity.intrinsic.inputs import ReadsObsOrLatent
+from curiosity.intrinsic.nets import make_feature_net, mlp
 from curiosity.types import TransitionBatch
 
 
@@ -29,7 +30,7 @@ def forward_error(pred_next: Tensor, next_feat: Tensor) -> Tensor:
     return 0.5 * (pred_next - next_feat).square().sum(dim=-1)
 
 
-class ICM(IntrinsicReward):
+class ICM(ReadsObsOrLatent, IntrinsicReward):
     """ICM bonus r = η · ½ ‖φ̂_{t+1} − φ_{t+1}‖² and its joint training loss.
 
     Networks: encoder φ: (B, *obs_shape) → (B, F); inverse head cat(φ_t, φ_{t+1}) → (B, n_actions) logits;
@@ -56,6 +57,8 @@ class ICM(IntrinsicReward):
         loss_weight: Overall multiplier of the loss (10 in Pathak et al.'s code).
         lr: Adam learning rate.
         scale: Multiplier applied by :meth:`IntrinsicReward.__call__`.
+        input: ``obs``: φ reads the observations o_t, o_{t+1} (Pathak's ICM); ``latent``: φ reads the agent's latents
+            z_t, z_{t+1} (detached), so ICM can also score a planner's imagined latent edges.
     """
 
     log_keys = ("losses/icm_inverse", "losses/icm_forward")
@@ -71,8 +74,10 @@ class ICM(IntrinsicReward):
         loss_weight: float = 10.0,
         lr: float = 1e-3,
         scale: float = 1.0,
+        input: str = "obs",
     ) -> None:
         super().__init__(scale=scale)
+        self._set_input(input)
         if not 0.0 <= beta <= 1.0:
             raise ValueError(f"beta must lie in [0, 1], got {beta}")
         self.feature_dim, self.n_actions = int(feature_dim), int(n_actions)
@@ -91,26 +96,37 @@ class ICM(IntrinsicReward):
         n_actions: int,
         feature_dim: int = 32,
         mlp_hidden: Sequence[int] = (64, 64),
-        hidden: int = 64,
-        eta: float = 1.0,
-        beta: float = 0.2,
-        loss_weight: float = 10.0,
-        lr: float = 1e-3,
-        scale: float = 1.0,
+        **kwargs: Any,
     ) -> ICM:
-        """Build with :func:`~curiosity.baselines.nets.make_feature_net` as φ (conv for (C, H, W), MLP for (D,))."""
+        """Build with :func:`~curiosity.intrinsic.nets.make_feature_net` as φ (conv for (C, H, W), MLP for (D,));
+        ``kwargs`` go to the constructor (``hidden``, ``eta``, ``beta``, ``loss_weight``, ``lr``, ``scale``, ``input``)."""
         encoder = make_feature_net(obs_shape, feature_dim, mlp_hidden)
-        return cls(encoder, feature_dim, n_actions, hidden, eta, beta, loss_weight, lr, scale)
+        return cls(encoder, feature_dim, n_actions, **kwargs)
+
+    @classmethod
+    def from_context(cls, *, context: IntrinsicContext, input: str = "obs", **kwargs: Any) -> ICM:
+        """Built from the agent's parts: φ over its observations (``input=obs``) or its latents (``latent``: an MLP)."""
+        shape = cls.input_shape(context, input)
+        return cls.from_obs_shape(obs_shape=shape, n_actions=context.n_actions, input=input, **kwargs).to(context.device)
 
     def _device(self) -> torch.device:
         return next(self.nets.parameters()).device
 
+    def _inputs(self, batch: TransitionBatch) -> tuple[Tensor, Tensor]:
+        if self.input == "latent":
+            z, z_next = latents_of(batch, "icm (input=latent)")
+            return z.detach(), z_next.detach()
+        return batch.obs, batch.next_obs
+
     def _predict(self, batch: TransitionBatch) -> tuple[Tensor, Tensor, Tensor]:
         """(φ̂_{t+1}, φ_{t+1}, inverse logits), shapes (B, F), (B, F), (B, n_actions)."""
+        return self._predict_from(*self._inputs(batch), batch.act)
+
+    def _predict_from(self, x: Tensor, x_next: Tensor, act: Tensor) -> tuple[Tensor, Tensor, Tensor]:
         device = self._device()
-        feat = self.encoder(batch.obs.to(device).float())
-        next_feat = self.encoder(batch.next_obs.to(device).float())
-        onehot = F.one_hot(batch.act.to(device).long(), self.n_actions).to(feat.dtype)
+        feat = self.encoder(x.to(device).float())
+        next_feat = self.encoder(x_next.to(device).float())
+        onehot = F.one_hot(act.to(device).long(), self.n_actions).to(feat.dtype)
         pred_next = self.forward_head(torch.cat([feat, onehot], dim=-1))
         logits = self.inverse_head(torch.cat([feat, next_feat], dim=-1))
         return pred_next, next_feat, logits
@@ -120,6 +136,15 @@ class ICM(IntrinsicReward):
         self.nets.eval()
         with torch.no_grad():
             pred_next, next_feat, _ = self._predict(batch)
+            return self.eta * forward_error(pred_next, next_feat)
+
+    def imagine(self, z: Tensor, a: Tensor, z_next: Tensor) -> Tensor:
+        """The bonus of imagined latent edges (``input=latent`` only), (N,); no gradient or state change."""
+        if self.input != "latent":
+            raise ValueError("icm with input=obs scores observations; set its input to latent to score imagined steps")
+        self.nets.eval()
+        with torch.no_grad():
+            pred_next, next_feat, _ = self._predict_from(z, z_next, a)
             return self.eta * forward_error(pred_next, next_feat)
 
     def update(self, batch: TransitionBatch) -> dict[str, float]:

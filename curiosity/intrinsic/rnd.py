@@ -13,8 +13,9 @@ from typing import Any
 import torch
 from torch import Tensor, nn
 
-from curiosity.baselines.nets import make_feature_net, make_predictor_net
-from curiosity.intrinsic.base import IntrinsicReward
+from curiosity.intrinsic.base import IntrinsicContext, IntrinsicReward, latents_of
+from curiosity.intrinsic.inputs import ReadsObsOrLatent
+from curiosity.intrinsic.nets import make_feature_net, make_predictor_net
 from curiosity.intrinsic.normalisers import ReturnNormaliser, RunningMeanStd
 from curiosity.types import TransitionBatch
 
@@ -24,7 +25,7 @@ def distillation_error(pred: Tensor, target: Tensor) -> Tensor:
     return (pred - target).square().mean(dim=-1)
 
 
-class RND(IntrinsicReward):
+class RND(ReadsObsOrLatent, IntrinsicReward):
     """RND bonus r = mean_k (f̂(x)_k − f(x)_k)² / σ_R, with x = clip((o_{t+1} − μ_o) / σ_o, −c, c).
 
     f is a fixed random target (``requires_grad`` off, never stepped); f̂ is trained by Adam on the batch mean of
@@ -52,6 +53,8 @@ class RND(IntrinsicReward):
         obs_clip: c, normalised observations are clipped to [−c, c].
         scale: Multiplier applied by :meth:`IntrinsicReward.__call__`.
         observe_in_update: Whether :meth:`update` calls :meth:`observe` on its batch before the predictor step.
+        input: ``obs``: the networks read o_{t+1} (Burda's RND); ``latent``: they read the agent's latent z_{t+1}
+            (detached), so RND can also score a planner's imagined latent edges.
     """
 
     log_keys = ("losses/rnd",)
@@ -66,8 +69,10 @@ class RND(IntrinsicReward):
         obs_clip: float = 5.0,
         scale: float = 1.0,
         observe_in_update: bool = True,
+        input: str = "obs",
     ) -> None:
         super().__init__(scale=scale)
+        self._set_input(input)
         self.obs_shape = tuple(int(s) for s in obs_shape)
         self.obs_clip = float(obs_clip)
         self.observe_in_update = bool(observe_in_update)
@@ -87,17 +92,24 @@ class RND(IntrinsicReward):
         out_dim: int = 64,
         predictor_hidden: int = 128,
         mlp_hidden: Sequence[int] = (64, 64),
-        lr: float = 1e-4,
-        gamma_int: float = 0.99,
-        obs_clip: float = 5.0,
-        scale: float = 1.0,
-        observe_in_update: bool = True,
+        **kwargs: Any,
     ) -> RND:
-        """Build f with :func:`~curiosity.baselines.nets.make_feature_net` and the deeper f̂ with ``make_predictor_net``."""
+        """Build f with :func:`~curiosity.intrinsic.nets.make_feature_net` and the deeper f̂ with ``make_predictor_net``;
+        ``kwargs`` go to the constructor (``lr``, ``gamma_int``, ``obs_clip``, ``scale``, ``observe_in_update``, ``input``)."""
         obs_shape = tuple(int(s) for s in obs_shape)
         target = make_feature_net(obs_shape, out_dim, mlp_hidden)
         predictor = make_predictor_net(obs_shape, out_dim, predictor_hidden, mlp_hidden)
-        return cls(target, predictor, obs_shape, lr, gamma_int, obs_clip, scale, observe_in_update)
+        return cls(target, predictor, obs_shape, **kwargs)
+
+    @classmethod
+    def from_context(cls, *, context: IntrinsicContext, input: str = "obs", **kwargs: Any) -> RND:
+        """Built from the agent's parts: over its observations (``input=obs``) or its latents (``latent``: MLPs)."""
+        return cls.from_obs_shape(obs_shape=cls.input_shape(context, input), input=input, **kwargs).to(context.device)
+
+    def _next_input(self, batch: TransitionBatch) -> Tensor:
+        if self.input == "latent":
+            return latents_of(batch, "rnd (input=latent)")[1].detach()
+        return batch.next_obs
 
     def _device(self) -> torch.device:
         return next(self.predictor.parameters()).device
@@ -121,19 +133,27 @@ class RND(IntrinsicReward):
 
     def compute(self, batch: TransitionBatch) -> Tensor:
         """r_b = raw_bonus(o_{t+1})_b / σ_R, shape (B,); no gradient, no state change (see the class contract)."""
-        return self.return_normaliser.normalise(self.raw_bonus(batch.next_obs))
+        return self.return_normaliser.normalise(self.raw_bonus(self._next_input(batch)))
 
-    def observe(self, batch: TransitionBatch) -> None:
-        """Merge ``batch.next_obs`` into (μ_o, σ_o), then the batch's raw bonus, as a time-ordered stream, into σ_R."""
-        self.obs_rms.update(batch.next_obs.float())
-        self.return_normaliser.update(self.raw_bonus(batch.next_obs))
+    def imagine(self, z: Tensor, a: Tensor, z_next: Tensor) -> Tensor:
+        """The bonus of imagined latent edges, raw_bonus(z_next) / σ_R (``input=latent`` only), (N,)."""
+        if self.input != "latent":
+            raise ValueError("rnd with input=obs scores observations; set its input to latent to score imagined steps")
+        return self.return_normaliser.normalise(self.raw_bonus(z_next))
+
+    def observe(self, batch: TransitionBatch) -> dict[str, float]:
+        """Merge the next inputs into (μ_o, σ_o), then the batch's raw bonus, as a time-ordered stream, into σ_R."""
+        x = self._next_input(batch)
+        self.obs_rms.update(x.float())
+        self.return_normaliser.update(self.raw_bonus(x))
+        return {}
 
     def update(self, batch: TransitionBatch) -> dict[str, float]:
         """[:meth:`observe`, if ``observe_in_update``] then one predictor step; returns the pre-step ``losses/rnd``."""
         if self.observe_in_update:
             self.observe(batch)
         self.predictor.train()
-        loss = self._errors(batch.next_obs).mean()
+        loss = self._errors(self._next_input(batch)).mean()
         self.optimiser.zero_grad(set_to_none=True)
         loss.backward()
         self.optimiser.step()

@@ -1,0 +1,212 @@
+"""The paper's novelty (§3.3): how rare a latent state, or state–action pair, is in a memory of the agent's own
+experience, by a density (KDE) or distance (kNN) estimator from the ``estimator`` group.
+
+Input (``input``):
+    ``state_action`` (paper text): memory rows y_t = [s_t, c·onehot(a_t)], an edge (s, a, s') is scored by
+    novelty(y) with y = [s, c·onehot(a)]; c = ``action_scale`` sets how far apart actions are (method.md §9).
+    ``state`` (precursor code, NSRS): memory rows s_t; an edge is scored by the novelty of the state reached, s'.
+With ``standardise=True`` the latent part is standardised per dimension by the memory's mean and standard deviation
+at the last refresh, so the bandwidth and ``action_scale`` are in units of the latent spread, which drifts while the
+encoder trains.
+
+The memory holds one row per real transition (keyed by its global replay index). The encoder keeps changing, so the
+memory is re-embedded from the replay's observations (a *refresh*) every ``refresh_every`` env steps from the end of
+the warm-up, and in between whenever its drift exceeds ``refresh_drift`` (> 0); the estimator is refitted then.
+Nothing is scored before the first refresh (``ready``).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+import torch
+from torch import Tensor
+
+from curiosity.intrinsic.base import IntrinsicContext, IntrinsicReward, latents_of
+from curiosity.nets.onehot import one_hot
+from curiosity.novelty.memory import EmbeddingMemory
+from curiosity.novelty.protocols import NoveltyEstimator
+from curiosity.types import TransitionBatch
+
+INPUTS = ("state_action", "state")
+MEMORY_KEYS = ("intrinsic/memory_size", "memory/drift", "memory/refreshed", "timing/refresh_ms")
+
+
+class LatentNovelty(IntrinsicReward):
+    """r_nov of edges (s, a, s') on the agent's latents over a refreshed memory (see the module docstring).
+
+    Args:
+        estimator: the novelty estimator (fitted at each refresh).
+        memory: the embedding memory (exact or reservoir).
+        context: the agent's parts; ``replay`` and ``encode`` are required (refreshes re-encode stored observations).
+        input: ``state_action`` or ``state``.
+        action_scale: c, the length of the action part of y.
+        standardise: standardise latents per dimension by the memory's statistics at each refresh.
+        refresh_every: env steps between refreshes, counted from the end of the warm-up.
+        refresh_drift: also refresh whenever :meth:`drift` exceeds this (standardised units); 0: off.
+        scale: multiplies ``__call__``.
+    """
+
+    needs_latents = True
+
+    @classmethod
+    def can_imagine(cls, options: Mapping[str, Any]) -> bool:
+        return True
+
+    def __init__(self, estimator: NoveltyEstimator, memory: EmbeddingMemory, context: IntrinsicContext, *,
+                 input: str = "state", action_scale: float = 1.0, standardise: bool = True, refresh_every: int = 10,
+                 refresh_drift: float = 0.0, scale: float = 1.0) -> None:  # fmt: skip
+        super().__init__(scale)
+        if input not in INPUTS:
+            raise ValueError(f"novelty input must be one of {INPUTS}, got {input!r}")
+        if context.replay is None or context.encode is None:
+            raise ValueError("latent novelty needs the agent's replay and encoder (IntrinsicContext.replay, .encode)")
+        self.estimator, self.memory, self.replay, self.encode = estimator, memory, context.replay, context.encode
+        self.n_actions, self.warmup_steps, self.device = context.n_actions, context.warmup_steps, context.device
+        self.input, self.action_scale, self.standardise = input, float(action_scale), bool(standardise)
+        self.refresh_every, self.refresh_drift = int(refresh_every), float(refresh_drift)
+        self.z_mean: Tensor | None = None
+        self.z_std: Tensor | None = None
+        self._ready = False
+        self.log_keys = (*MEMORY_KEYS, *estimator.log_keys)
+
+    @classmethod
+    def from_context(cls, *, context: IntrinsicContext, estimator: NoveltyEstimator, memory_mode: str = "exact",
+                     memory_size: int = 100_000, **kwargs: Any) -> LatentNovelty:  # fmt: skip
+        """With an :class:`EmbeddingMemory` of ``memory_mode`` (``exact`` or ``reservoir`` of ``memory_size`` rows)."""
+        if not isinstance(estimator, NoveltyEstimator):
+            raise TypeError(f"estimator must be a NoveltyEstimator, got {type(estimator).__name__}")
+        memory = EmbeddingMemory(mode=memory_mode, reservoir_size=memory_size, seed=context.seed)
+        return cls(estimator, memory, context, **kwargs)
+
+    @property
+    def ready(self) -> bool:
+        return self._ready
+
+    @property
+    def imaginable(self) -> bool:
+        return True
+
+    # ------------------------------------------------------------------ embeddings
+    def _std(self, z: Tensor) -> Tensor:
+        if self.z_mean is None or self.z_std is None:
+            return z
+        return (z - self.z_mean) / self.z_std
+
+    def embed(self, z: Tensor, a: Tensor) -> Tensor:
+        """Memory/query embedding of pairs: z (N, d), a (N,) long -> (N, d + A) or (N, d)."""
+        z = self._std(z)
+        if self.input == "state":
+            return z
+        return torch.cat([z, self.action_scale * one_hot(a, self.n_actions).to(z.dtype)], dim=1)
+
+    def _encode_stored(self, keys: np.ndarray) -> Tensor:
+        """Latents of stored transitions' o_t by global index, with the current encoder: (M,) -> (M, d)."""
+        parts = [self.encode(self.replay.obs_at(keys[i : i + 512]).to(self.device)) for i in range(0, len(keys), 512)]
+        return torch.cat(parts)
+
+    def add(self, z: Tensor, a: int, index: int) -> None:
+        """Store the embedding of the pair (s_t, a_t) of transition ``index`` (z: (d,) latent of o_t)."""
+        emb = self.embed(z.unsqueeze(0), torch.tensor([a], device=z.device))
+        self.memory.add(emb, keys=torch.tensor([index], device="cpu"))
+        if self._ready:
+            self.estimator.set_memory(self.memory.tensor())
+
+    @torch.no_grad()
+    def refresh(self) -> None:
+        """Re-embed every memory row and the random-phase reference with the current encoder; refit the estimator."""
+        keys = self.memory.keys().numpy()
+        z = self._encode_stored(keys)
+        if self.standardise:
+            self.z_mean, self.z_std = z.mean(0), z.std(0, correction=0).clamp_min(1e-8)
+        self.memory.replace(self.embed(z, self.replay.actions_at(keys).to(z.device)))
+        ref_keys = np.arange(min(self.warmup_steps, self.replay.total_added))
+        reference = None
+        if len(ref_keys) > 1:
+            row = {int(k): i for i, k in enumerate(keys)}
+            if all(int(k) in row for k in ref_keys):  # the random phase is in the memory: no second encoding
+                z_ref = z[[row[int(k)] for k in ref_keys]]
+            else:  # a reservoir may have dropped some of it
+                z_ref = self._encode_stored(ref_keys)
+            reference = self.embed(z_ref, self.replay.actions_at(ref_keys).to(z.device))
+        self.estimator.fit(self.memory.tensor(), reference, stream_size=self.memory.stands_for)
+        self._ready = True
+
+    @torch.no_grad()
+    def drift(self, rows: int = 64) -> float:
+        """How far the memory has gone stale: the median distance, in standardised latent units, between up to ``rows``
+        memory rows (evenly spaced) and the embedding the current encoder gives their observations."""
+        keys = self.memory.keys()
+        index = torch.linspace(0, len(keys) - 1, min(rows, len(keys)), device="cpu").round().long()
+        now = self._std(self._encode_stored(keys[index].numpy()))
+        stored = self.memory.tensor()[index, : now.shape[1]]
+        return float((now - stored).norm(dim=1).median())
+
+    def _refresh_due(self, step: int, logs: dict[str, float]) -> bool:
+        """Every ``refresh_every`` env steps from the end of the warm-up, and in between whenever the memory's drift
+        (logged as ``memory/drift``) exceeds ``refresh_drift`` (> 0)."""
+        since = step + 1 - self.warmup_steps
+        if since < 0:
+            return False
+        if since % self.refresh_every == 0:
+            return True
+        if self.refresh_drift > 0 and self._ready:
+            logs["memory/drift"] = self.drift()
+            return logs["memory/drift"] > self.refresh_drift
+        return False
+
+    # ------------------------------------------------------------------ rewards
+    def novelty(self, z: Tensor, a: Tensor, z_next: Tensor) -> Tensor:
+        """Novelty of edges (z, a, z_next): (N, d), (N,), (N, d) -> (N,)."""
+        if self.input == "state":
+            return self.estimator(self._std(z_next))
+        return self.estimator(self.embed(z, a))
+
+    def compute(self, batch: TransitionBatch) -> Tensor:
+        z, z_next = latents_of(batch, "latent novelty")
+        return self.novelty(z, batch.act, z_next)
+
+    def imagine(self, z: Tensor, a: Tensor, z_next: Tensor) -> Tensor:
+        return self.novelty(z, a, z_next)
+
+    def update(self, batch: TransitionBatch) -> dict[str, float]:
+        """Nothing trains here (the encoder trains in the agent)."""
+        return {}
+
+    def observe(self, batch: TransitionBatch) -> dict[str, float]:
+        """Add each fresh transition's (s_t, a_t) to the memory; refresh when due (see the module docstring)."""
+        z, _ = latents_of(batch, "latent novelty")
+        if batch.index is None:
+            raise ValueError("latent novelty keys its memory by transition index: the batch must carry index")
+        for row, (a, index) in enumerate(zip(batch.act.tolist(), batch.index.tolist(), strict=True)):
+            self.add(z[row], int(a), int(index))
+        logs: dict[str, float] = {"intrinsic/memory_size": float(len(self.memory))} if self._ready else {}
+        if self._refresh_due(int(batch.index[-1]), logs):
+            start = time.perf_counter()
+            self.refresh()
+            logs.update(self.estimator.logs, **{"timing/refresh_ms": 1e3 * (time.perf_counter() - start)})
+            logs["memory/refreshed"] = 1.0
+        elif self._ready:
+            logs["memory/refreshed"] = 0.0
+        return logs
+
+    # ------------------------------------------------------------------ checkpointing
+    def to(self, device: torch.device | str) -> LatentNovelty:
+        self.device = device
+        return self
+
+    def state_dict(self) -> dict[str, Any]:
+        return {"memory": self.memory.state_dict(), "ready": self._ready, "z_mean": self.z_mean, "z_std": self.z_std,
+                "estimator": self.estimator.state_dict()}  # fmt: skip
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        self.memory.load_state_dict(state["memory"])
+        self._ready = bool(state["ready"])
+        self.z_mean, self.z_std = state["z_mean"], state["z_std"]
+        if state["estimator"] is not None:
+            self.estimator.load_state_dict(state["estimator"])
+        if self._ready:
+            self.estimator.set_memory(self.memory.tensor())
