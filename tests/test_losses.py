@@ -164,3 +164,17 @@ def test_double_dqn_loss_gradient_only_through_online_q():
     double_dqn_loss(q, q_next_online, q_next_target, act, reward, term, gamma=0.5, huber=False).backward()
     assert q_next_online.grad is None and q_next_target.grad is None
     assert torch.equal(q.grad, torch.tensor([[0.0, 0.0, -8.0], [1.0, 0.0, 0.0]]))  # exact: small-integer TD errors
+
+
+def test_the_total_loss_is_one_weighted_sum_over_named_terms() -> None:
+    from curiosity.agents.representation import LossWeights, total_loss
+
+    x = torch.tensor(2.0, requires_grad=True)
+    terms = {"transition": x * 1.0, "entropy": torch.tensor(-1.0), "q": x * x}
+    weights = LossWeights(transition=0.5, q=2.0, reward=7.0).of_terms()
+    loss = total_loss(terms, weights)
+    assert float(loss) == pytest.approx(0.5 * 2 - 1 + 2.0 * 4)  # reward is not a term of this batch: not counted
+    loss.backward()
+    assert float(x.grad) == pytest.approx(0.5 + 2.0 * 2 * 2)
+    with pytest.raises(KeyError):
+        total_loss({"unknown": x}, weights)

@@ -16,7 +16,14 @@ from omegaconf import DictConfig, OmegaConf
 
 from curiosity.agents.base import Agent
 from curiosity.agents.q_learning import QLearner
-from curiosity.agents.representation import LOSS_KEYS, LossWeights, check_finite, encode_segments, representation_loss
+from curiosity.agents.representation import (
+    LOSS_KEYS,
+    LossWeights,
+    check_finite,
+    encode_segments,
+    representation_terms,
+    total_loss,
+)
 from curiosity.agents.schedule import TrainSchedule
 from curiosity.agents.world_model import WorldModel
 from curiosity.config.build import build, choice
@@ -77,7 +84,8 @@ class PaperAgent(Agent):
         self.model = build_world_model(cfg).to(self.device)
         self.regulariser = build(cfg.entropy)
         self.weights = LossWeights(transition=cfg.transition_coef, reward=cfg.reward_coef, backward=cfg.backward.coef,
-                                   sigma_b=cfg.backward.sigma_b, normalised_transition=cfg.normalised_transition,
+                                   q=cfg.q_coef, sigma_b=cfg.backward.sigma_b,
+                                   normalised_transition=cfg.normalised_transition,
                                    detach_targets=cfg.detach_targets)  # fmt: skip
         self.planner: Planner = build(cfg.planner)
         self.q = (QLearner(self.model.encoder, cfg.internal_dim, self.n_actions, gamma=cfg.planner.gamma,
@@ -263,20 +271,22 @@ class PaperAgent(Agent):
         return out
 
     def _iteration(self) -> tuple[dict[str, float], float]:
+        """One gradient step on L = Σ_k w_k L_k: the representation terms, and the TD term of a Q-tree agent."""
         seg = self.replay.sample_segments(self.cfg.batch_size, self.cfg.n_step, self.rng).to(self.device)
         enc = encode_segments(self.model, seg)
-        loss, logs = representation_loss(self.model, seg, enc, self.regulariser, self.weights)
+        terms, logs = representation_terms(self.model, seg, enc, self.regulariser, self.weights)
         first = seg.first_step().with_latents(enc.z[:, 0].detach(), enc.z[:, 1].detach())
         logs.update(self.intrinsic.update(first))  # rewards that learn (ICM, RND) take their step
         if self.q is not None:
-            z, z_next, act = enc.z[:, 0], enc.z[:, 1], seg.act[:, 0]
             with torch.no_grad():
                 r_int = self.intrinsic.compute(first)
-            q_loss = self.q.loss(z, act, seg.rewards[:, 0] + r_int, z_next, seg.obs[:, 1], seg.terminateds[:, 0])
-            check_finite("losses/q", q_loss)
-            loss = loss + self.cfg.q_coef * q_loss
-            logs["losses/q"] = q_loss.item()
+            terms["q"] = self.q.loss(enc.z[:, 0], first.act, first.rewards + r_int, enc.z[:, 1], seg.obs[:, 1],
+                                     first.terminateds)  # fmt: skip
+            check_finite("losses/q", terms["q"])
+            logs["losses/q"] = terms["q"].item()
+        loss = total_loss(terms, self.weights.of_terms())
         check_finite("losses/total", loss)
+        logs["losses/total"] = loss.item()
         self.optimizer.zero_grad(set_to_none=True)
         loss.backward()
         self.optimizer.step()

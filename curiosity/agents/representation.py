@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from functools import partial
 
@@ -31,14 +31,35 @@ def check_finite(term: str, value: Tensor) -> None:
 
 @dataclass
 class LossWeights:
-    """Coefficients of L = c_T L_trans(n) + λ_back L_back(n) + [regulariser, weighted inside] + λ_R L_R(n)."""
+    """The config weights of the named loss terms, L = Σ_k w_k L_k (:func:`total_loss`), and the losses' options.
+
+    ``transition`` = ``transition_coef``, ``reward`` = ``reward_coef`` (λ_R), ``backward`` = ``backward.coef``
+    (λ_back), ``q`` = ``q_coef`` (the TD loss of Q-tree agents); the entropy regulariser weighs itself
+    (``entropy.coef``), so its weight here is 1.
+    """
 
     transition: float = 1.0
     reward: float = 1.0
     backward: float = 0.0
+    q: float = 1.0
     sigma_b: float = 1.0
     normalised_transition: bool = False
     detach_targets: bool = True
+
+    def of_terms(self) -> dict[str, float]:
+        """name -> weight of every term a loss may have."""
+        return {"transition": self.transition, "entropy": 1.0, "reward": self.reward, "backward": self.backward,
+                "q": self.q}  # fmt: skip
+
+
+def total_loss(terms: Mapping[str, Tensor], weights: Mapping[str, float]) -> Tensor:
+    """L = Σ_k w_k L_k over the named terms present, in their order: ``terms`` name -> scalar, ``weights`` name -> w."""
+    total: Tensor | None = None
+    for name, value in terms.items():
+        total = weights[name] * value if total is None else total + weights[name] * value
+    if total is None:
+        raise ValueError("a loss needs at least one term")
+    return total
 
 
 @dataclass
@@ -56,35 +77,42 @@ def encode_segments(model: WorldModel, seg: SegmentBatch) -> Encoded:
     return Encoded(z=z, a1h=one_hot(seg.act, model.n_actions).to(z.dtype))
 
 
-def representation_loss(
+def representation_terms(
     model: WorldModel, seg: SegmentBatch, enc: Encoded, regulariser: Regulariser, w: LossWeights
-) -> tuple[Tensor, dict[str, float]]:
-    """L_total for one batch; returns the loss and every term as a float (keys in ``LOSS_KEYS``).
+) -> tuple[dict[str, Tensor], dict[str, float]]:
+    """The representation loss's named terms for one batch (each checked finite), and their values as floats.
 
-    The regulariser sees the first transition of each segment: (z_t, a_t, z_{t+1}); ``info/latent_logdet`` is the
-    common yardstick :func:`~curiosity.info.latent_logdet` of the same next latents z_{t+1}.
+    Terms: ``transition`` (n-step, averaged over an ensemble's members), ``entropy`` (the regulariser on the first
+    transition of each segment, (z_t, a_t, z_{t+1}), weighted inside), ``reward`` (with a reward model and
+    λ_R > 0), ``backward`` (with a backward predictor and λ_back > 0). Logs: ``losses/<term>``, the regulariser's own
+    diagnostics, and ``info/latent_logdet``, the common yardstick :func:`~curiosity.info.latent_logdet` of z_{t+1}.
     """
     z, a1h = enc.z, enc.a1h
     targets = z[:, 1:].detach() if w.detach_targets else z[:, 1:]
     members = model.transition.members  # an ensemble trains each member on its own loss
-    l_trans = sum(nstep_transition_loss(z[:, 0], a1h, targets, seg.terminateds, member,
-                                        normalised=w.normalised_transition) for member in members) / len(members)  # fmt: skip
-    check_finite("losses/transition", l_trans)
-    l_reg, logs = regulariser(z[:, 0], a1h[:, 0], z[:, 1])
-    check_finite("losses/entropy", l_reg)
-    total = w.transition * l_trans + l_reg
-    logs = {"losses/transition": l_trans.item(), **logs, "info/latent_logdet": latent_logdet(z[:, 1])}
+    terms = {"transition": sum(nstep_transition_loss(z[:, 0], a1h, targets, seg.terminateds, member,
+                                                     normalised=w.normalised_transition)
+                               for member in members) / len(members)}  # fmt: skip
+    terms["entropy"], logs = regulariser(z[:, 0], a1h[:, 0], z[:, 1])
     if w.reward > 0 and model.reward_model is not None:
-        l_r = nstep_reward_loss(z[:, :-1], a1h, seg.rewards, seg.terminateds, model.reward_model)
-        check_finite("losses/reward", l_r)
-        total = total + w.reward * l_r
-        logs["losses/reward"] = l_r.item()
+        terms["reward"] = nstep_reward_loss(z[:, :-1], a1h, seg.rewards, seg.terminateds, model.reward_model)
     if w.backward > 0 and model.backward is not None:
         y = torch.cat([z[:, :-1], a1h], dim=2)
         nll = partial(backward_predictor_nll, sigma_b=w.sigma_b)
-        l_b = nstep_backward_loss(y, z[:, 1:], seg.terminateds, model.backward, nll)
-        check_finite("losses/backward", l_b)
-        total = total + w.backward * l_b
-        logs["losses/backward"] = l_b.item()
+        terms["backward"] = nstep_backward_loss(y, z[:, 1:], seg.terminateds, model.backward, nll)
+    for name, value in terms.items():
+        check_finite(f"losses/{name}", value)
+    logs = {"losses/transition": terms["transition"].item(), **logs, "info/latent_logdet": latent_logdet(z[:, 1])}
+    logs.update({f"losses/{name}": terms[name].item() for name in ("reward", "backward") if name in terms})
+    return terms, logs
+
+
+def representation_loss(
+    model: WorldModel, seg: SegmentBatch, enc: Encoded, regulariser: Regulariser, w: LossWeights
+) -> tuple[Tensor, dict[str, float]]:
+    """L_total of the representation terms alone (:func:`representation_terms`, :func:`total_loss`); logs as there,
+    with ``losses/total``."""
+    terms, logs = representation_terms(model, seg, enc, regulariser, w)
+    total = total_loss(terms, w.of_terms())
     logs["losses/total"] = total.item()
     return total, logs

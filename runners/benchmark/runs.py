@@ -59,11 +59,13 @@ def _instrument(timer: PartTimer) -> None:
                              ("_score_noise", "diagnostics"), ("_probe", "diagnostics")):  # fmt: skip
             if hasattr(agent, method):
                 timer.wrap(agent, method, part)
-        cur = getattr(agent, "curiosity", None)
-        if cur is not None:
-            for method in ("imagined_terms", "from_latents", "observe_latents", "add"):
-                timer.wrap(cur, method, "novelty")
-            timer.wrap(cur, "refresh", "refresh")
+        intrinsic = getattr(agent, "intrinsic", None)  # the intrinsic reward (random has none)
+        if intrinsic is not None:
+            for method in ("imagined_terms", "compute_terms", "observe"):
+                timer.wrap(intrinsic, method, "novelty")
+        novelty = getattr(agent, "novelty", None)  # its latent novelty term, whose refresh is timed apart
+        if novelty is not None:
+            timer.wrap(novelty, "refresh", "refresh")
         return agent
 
     timer.replace(loop, "make_env", timed_env)
