@@ -24,6 +24,7 @@ import numpy as np
 import torch
 
 from analysis.plotting import panels, save
+from curiosity.agents.paper import PaperAgent
 from curiosity.envs.make import observe_state
 from curiosity.envs.simulator import Simulator
 from curiosity.errors import CheckpointError
@@ -67,7 +68,7 @@ def history(env: str, state: np.ndarray, k: int) -> list[np.ndarray]:
 
 def render(sim: Simulator, state: np.ndarray) -> np.ndarray:
     """The run's observation of one physical state (one frame, or the state vector)."""
-    sim.core.state = np.array(state, dtype=np.float64)
+    sim.adapter.set_physical_state(sim.core, state)
     raw = sim.core._get_ob() if hasattr(sim.core, "_get_ob") else np.array(state, dtype=np.float32)
     return observe_state(sim.env, raw).astype(np.float32)
 
@@ -103,9 +104,9 @@ def visited(cfg: Any, coverage: dict[str, np.ndarray]) -> np.ndarray:
 def draw(run_dir: Path, out: Path, n: int) -> list[Path]:
     """Restore the run, score the grid and write ``heatmap.{png,pdf}``; returns the two paths."""
     run = restore_run(run_dir)
-    if not hasattr(run.agent, "curiosity"):
+    if not isinstance(run.agent, PaperAgent) or run.agent.novelty is None:
         raise RestoreError(f"{run_dir}: method {run.cfg.method_label} has no latent curiosity module to map; "
-                           "allowed: runs of the paper's agent (baseline=none)")  # fmt: skip
+                           "allowed: runs of the paper's agent (baseline=none) with a novelty term")  # fmt: skip
     grid = plane(str(run.cfg.env.name), n)
     torch.manual_seed(0)  # the imagined prediction-error bonus samples dropout masks: the same map on every re-run
     values = scores(run.agent, observations(run.cfg, grid))

@@ -21,7 +21,7 @@ import torch
 from scipy.stats import spearmanr
 from torch import Tensor
 
-from curiosity.envs.energy import energy_fn
+from curiosity.envs import adapter_of
 from curiosity.envs.simulator import Simulator
 from curiosity.novelty.estimators import KDENovelty, KNNNovelty
 from curiosity.planning.probe import tree_latents
@@ -55,7 +55,7 @@ def landscape(run_dir: str | Path, states: int = 20, bandwidths: tuple[float, ..
     """Per variant: ``rho`` (mean Spearman of novelty return and final energy), ``positive`` (fraction of states
     with rho > 0), ``first_action`` (fraction where the novelty-best first action is the energy-best one)."""
     run = restore_run(run_dir)
-    energy = energy_fn(str(run.cfg.env.id))
+    energy = adapter_of(run.cfg.env).energy
     agent, env, obs, step = run.agent, run.env, run.obs, run.step
     if energy is None or not hasattr(agent, "planner") or agent.q is not None:
         raise RestoreError(f"{run_dir}: the landscape needs the paper's agent with planner=mpc on Acrobot or MountainCar")

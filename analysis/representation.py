@@ -37,9 +37,7 @@ from scipy.stats import spearmanr
 from curiosity.agents.paper import PaperAgent
 from curiosity.config import ConfigError
 from curiosity.config.build import build, choice
-from curiosity.envs import make_env, physical_state
-from curiosity.envs.directed import directed_action_fn
-from curiosity.envs.energy import energy_fn
+from curiosity.envs import adapter_of, make_env
 from curiosity.runtime.preflight import checked_config
 
 Policy = Callable[[np.ndarray, np.random.Generator], int]
@@ -57,28 +55,28 @@ class Trajectory:
 
 def rollout(cfg: DictConfig, steps: int, policy: Policy, seed: int) -> Trajectory:
     """``steps`` transitions of ``policy`` (physical state, rng -> action) in the run's env from ``reset(seed)``."""
-    env = make_env(cfg.env, max_steps=10**9)
+    env, adapter = make_env(cfg.env, max_steps=10**9), adapter_of(cfg.env)
     obs, _ = env.reset(seed=seed)
     rng = np.random.default_rng(seed)
     rows: list[tuple[Any, int, Any, np.ndarray]] = []
     for _ in range(steps):
-        action = policy(physical_state(env), rng)
+        action = policy(adapter.physical_state(env), rng)
         next_obs, _, _, _, _ = env.step(action)
-        rows.append((obs, action, next_obs, physical_state(env).copy()))
+        rows.append((obs, action, next_obs, adapter.physical_state(env).copy()))
         obs = next_obs
     env.close()
     o, a, n, p = zip(*rows, strict=True)
     return Trajectory(np.asarray(o), np.asarray(a), np.asarray(n), np.asarray(p))
 
 
-def pumping_policy(env_id: str, n_actions: int, p: float = 0.5) -> Policy:
+def pumping_policy(env_cfg: Any, n_actions: int, p: float = 0.5) -> Policy:
     """With probability ``p`` the directed action (push with the motion), else a uniform random action; uniform where
     the state has no directed action. p = 0.5 climbs past random play's energies without leaving its neighbourhood
     at once (Acrobot, 300 states from rest: median energy 11 J against random play's −10 J; a KDE on the physical
     state ranks these states above held-out random ones 86 % of the time, where p = 1 gives 100 %)."""
-    directed = directed_action_fn(env_id)
+    directed = adapter_of(env_cfg).directed_action
     if directed is None:
-        raise ConfigError([f"env.id={env_id}: the representation check needs an env with a directed action; "
+        raise ConfigError([f"env.id={env_cfg.id}: the representation check needs an env with a directed action; "
                            "allowed: Acrobot-v1, MountainCar-v0"])  # fmt: skip
 
     def policy(state: np.ndarray, rng: np.random.Generator) -> int:
@@ -143,7 +141,7 @@ def probe_sets(cfg: DictConfig, train_steps: int, probe_steps: int, data_seed: i
     n_actions = int(cfg.env.n_actions)
     train = rollout(cfg, train_steps, random_policy(n_actions), data_seed)
     held_out = rollout(cfg, probe_steps, random_policy(n_actions), data_seed + 1)
-    pump = rollout(cfg, probe_steps, pumping_policy(str(cfg.env.id), n_actions), data_seed + 2)
+    pump = rollout(cfg, probe_steps, pumping_policy(cfg.env, n_actions), data_seed + 2)
     return ProbeSets(train, held_out, pump)
 
 
@@ -166,7 +164,7 @@ def measure(agent: PaperAgent, cfg: DictConfig, data: ProbeSets, auc_physical: f
     z_train, z_rand, z_pump = (_encode(agent, t.next_obs) for t in (data.train, data.random, data.pumping))
     nov = novelty_scores(cfg, z_train, np.concatenate([z_rand, z_pump]), int(cfg.budget.warmup_steps))
     p_train, p_rand, p_pump = data.train.physical, data.random.physical, data.pumping.physical
-    energy = energy_fn(str(cfg.env.id))
+    energy = adapter_of(cfg.env).energy
     assert energy is not None  # every env with a directed action has an energy
     r = len(z_rand)
     return {"auc": auc(nov[r:], nov[:r]), "auc_physical": auc_physical,

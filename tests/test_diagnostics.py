@@ -12,7 +12,10 @@ from omegaconf import OmegaConf
 from torch import nn
 
 from curiosity.envs import make_env
-from curiosity.envs.directed import acrobot, directed_action_fn, mountaincar
+from curiosity.envs.acrobot import AcrobotAdapter
+from curiosity.envs.acrobot import directed as acrobot
+from curiosity.envs.adapter import EnvAdapter, adapter_of
+from curiosity.envs.mountaincar import directed as mountaincar
 from curiosity.envs.simulator import Simulator
 from curiosity.planning import MPCPlanner
 from curiosity.planning.probe import probe_model, tree_latents
@@ -47,7 +50,8 @@ def test_random_actions_score_one_third_on_every_behaviour_rate() -> None:
         tracker.record(int(rng.integers(3)), np.array([0.0, rng.normal()]))
     s = tracker.summary()
     assert s["repeat_rate"] == pytest.approx(1 / 3, abs=0.015) and s["directed_rate"] == pytest.approx(1 / 3, abs=0.015)
-    assert directed_action_fn("curiosity/Chain-v0") is None and directed_action_fn("Acrobot-v1") is acrobot
+    assert adapter_of(compose_cfg(["env=chain", "encoder=mlp"]).env).directed_action is None
+    assert adapter_of(compose_cfg().env).directed_action is acrobot
 
 
 # ----------------------------------------------------------------------------- simulator
@@ -228,8 +232,8 @@ def test_pe_estimate_signal_is_measured_on_real_transitions(tmp_path: Path) -> N
 def test_energy_is_conserved_without_torque_and_known_at_rest() -> None:
     import gymnasium as gym
 
-    from curiosity.envs.energy import acrobot as acrobot_energy
-    from curiosity.envs.energy import energy_fn, mountaincar as mountaincar_energy
+    from curiosity.envs.acrobot import energy as acrobot_energy
+    from curiosity.envs.mountaincar import energy as mountaincar_energy
 
     assert acrobot_energy(np.zeros(4)) == pytest.approx(-19.6)  # both links hanging: −(0.5 + 1 + 0.5)·9.8
     env = gym.make("Acrobot-v1").unwrapped
@@ -249,7 +253,7 @@ def test_energy_is_conserved_without_torque_and_known_at_rest() -> None:
     for _ in range(100):
         car.step(1)  # no push
     assert mountaincar_energy(car.state) == pytest.approx(start, abs=1e-6)
-    assert energy_fn("curiosity/Chain-v0") is None
+    assert EnvAdapter("curiosity/Chain-v0").energy is None and AcrobotAdapter("Acrobot-v1").energy is acrobot_energy
 
 
 def test_landscape_command_reports_every_variant_and_refuses_the_chain(

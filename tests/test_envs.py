@@ -1,12 +1,21 @@
-"""Environments: gymnasium's checker, observation format, renderer agreement, coverage."""
+"""Environments: gymnasium's checker, observation format, renderer agreement, coverage, adapters."""
 
 from __future__ import annotations
 
+import json
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
-from curiosity.envs import GridCoverage, make_env, physical_state
+from curiosity.envs import EnvAdapter, GridCoverage, adapter_of, make_env
+from curiosity.envs.acrobot import AcrobotAdapter
+from curiosity.envs.adapter import env_actions, env_state_dim
+from curiosity.runtime.loop import run
 from tests.conftest import compose_cfg
 
 CASES = [("acrobot", "pixels", "gym"), ("acrobot", "pixels", "fast"), ("acrobot", "state", "gym"),
@@ -62,7 +71,8 @@ def test_fast_renderer_agrees_with_gym_renderer(name: str) -> None:
         a = int(rng.integers(3))
         og, *_ = gym_env.step(a)
         of, *_ = fast_env.step(a)
-        assert np.array_equal(physical_state(gym_env), physical_state(fast_env))
+        adapter = adapter_of(compose_cfg([f"env={name}"]).env)
+        assert np.array_equal(adapter.physical_state(gym_env), adapter.physical_state(fast_env))
         diffs.append(np.abs(og[-1] - of[-1]).mean() * 128)  # gray levels
     # Measured: 0.6 gray levels (Acrobot and MountainCar). Blank frames would differ by ~10, a shifted scene by > 3.
     assert np.mean(diffs) < 1.5, np.mean(diffs)
@@ -83,3 +93,69 @@ def test_grid_coverage_counts_distinct_cells() -> None:
     restored = GridCoverage([0.0, 0.0], [1.0, 1.0], [2, 4])
     restored.load_state_dict(cov.state_dict())
     assert restored.fraction == cov.fraction
+
+
+# ----------------------------------------------------------------------------- adapters
+class FallingCorridor(gym.Env):
+    """41 cells, start 5 cells from the left end: falling off the left end terminates without the goal (info
+    ``goal`` False), reaching the right end terminates with it."""
+
+    metadata = {"render_modes": []}  # noqa: RUF012
+
+    def __init__(self) -> None:
+        self.observation_space = gym.spaces.Box(-1.0, 1.0, shape=(1,), dtype=np.float32)
+        self.action_space = gym.spaces.Discrete(3)
+        self.state = np.array([5.0])
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
+        super().reset(seed=seed)
+        self.state = np.array([5.0])
+        return self.state.astype(np.float32) / 40, {}
+
+    def step(self, action: int) -> tuple[np.ndarray, float, bool, bool, dict]:
+        self.state = self.state + (int(action) - 1)
+        at_end = self.state[0] in (0.0, 40.0)
+        return self.state.astype(np.float32) / 40, -1.0, at_end, False, {"goal": self.state[0] == 40.0}
+
+
+if "tests/FallingCorridor-v0" not in gym.registry:  # get_class may import this module a second time
+    gym.register(id="tests/FallingCorridor-v0", entry_point=FallingCorridor)
+
+
+class FallingCorridorAdapter(EnvAdapter):
+    """Only the right end is the goal."""
+
+    def goal_reached(self, terminated: bool, info: Mapping[str, Any]) -> bool:
+        return bool(terminated and info.get("goal", False))
+
+
+def test_a_termination_that_is_not_the_goal_resets_the_env_and_the_run_goes_on(tmp_path: Path) -> None:
+    cfg = compose_cfg(["env=chain", "encoder=mlp", "env.id=tests/FallingCorridor-v0", "baseline=random",
+                       "progress=false", "env._target_=tests.test_envs.FallingCorridorAdapter",
+                       "env.coverage_low=[-0.5]", "env.coverage_high=[40.5]", "env.coverage_bins=[41]", "budget=smoke",
+                       "budget.max_steps=300"])  # fmt: skip
+    summary = run(cfg, tmp_path)
+    # measured with this seed: one fall off the left end (before the adapters, that fall ended the run as "goal"),
+    # the right end never reached in 300 steps
+    assert summary.episode_resets >= 1, summary
+    assert summary.env_steps == 300 and not summary.reached_goal
+    assert json.loads((tmp_path / "summary.json").read_text())["episode_resets"] == summary.episode_resets
+    assert (cfg.env.n_actions, cfg.env.state_dim) == (3, 1)  # from the env's own spaces
+
+
+def test_actions_and_state_size_come_from_the_envs_spaces() -> None:
+    assert (env_actions("CartPole-v1"), env_state_dim("CartPole-v1")) == (2, 4)
+    for name, actions, dim in (("acrobot", 3, 6), ("mountaincar", 3, 2)):
+        cfg = compose_cfg([f"env={name}"])
+        assert (cfg.env.n_actions, cfg.env.state_dim, cfg.planner.n_actions) == (actions, dim, actions)
+    assert isinstance(adapter_of(compose_cfg().env), AcrobotAdapter)
+
+
+def test_the_acrobot_adapter_reads_and_sets_the_physical_state() -> None:
+    cfg = compose_cfg(["env.renderer=fast"])
+    env, adapter = make_env(cfg.env, 100), adapter_of(cfg.env)
+    env.reset(seed=0)
+    state = np.array([0.1, -0.2, 0.3, -0.4])
+    adapter.set_physical_state(env, state)
+    assert np.array_equal(adapter.physical_state(env), state)
+    assert not adapter.goal_reached(False, {}) and adapter.goal_reached(True, {})  # its termination is its goal

@@ -58,9 +58,23 @@ def one_minus(value: float) -> float:
     return 1.0 - float(value)
 
 
+def _env_actions(env_id: str) -> int:
+    from curiosity.envs.adapter import env_actions  # imports gymnasium: only when a config asks
+
+    return env_actions(env_id)
+
+
+def _env_state_dim(env_id: str) -> int:
+    from curiosity.envs.adapter import env_state_dim
+
+    return env_state_dim(env_id)
+
+
 def register_resolvers() -> None:
-    """Register ``${run_variant:...}``, ``${help_groups:}`` and ``${one_minus:...}``; safe to call more than once
-    (jobs share a process)."""
+    """Register ``${run_variant:...}``, ``${help_groups:}``, ``${one_minus:...}``, ``${env_actions:<id>}`` and
+    ``${env_state_dim:<id>}``; safe to call more than once (jobs share a process)."""
     OmegaConf.register_new_resolver("run_variant", run_variant, replace=True)
     OmegaConf.register_new_resolver("help_groups", help_groups, replace=True)
     OmegaConf.register_new_resolver("one_minus", one_minus, replace=True)
+    OmegaConf.register_new_resolver("env_actions", _env_actions, replace=True)
+    OmegaConf.register_new_resolver("env_state_dim", _env_state_dim, replace=True)

@@ -77,14 +77,17 @@ class BandwidthRule(Enum):
 # ---------------------------------------------------------------- env
 @dataclass
 class EnvConfig:
+    """An environment (curiosity/envs/adapter.py): its adapter, gymnasium id, observations and coverage grid."""
+
     name: str = MISSING
+    _target_: str = "curiosity.envs.adapter.EnvAdapter"  # the env's adapter: physical state, goal, directed action
     id: str = MISSING
     obs: ObsKind = ObsKind.pixels
     renderer: Renderer = Renderer.gym
     frame_size: int = 32
     frame_stack: int = 4
-    state_dim: int = MISSING  # length of the env's own observation vector (env.obs=state)
-    n_actions: int = 3
+    state_dim: int = "${env_state_dim:${.id}}"  # type: ignore[assignment]  # the env's own observation vector's length
+    n_actions: int = "${env_actions:${.id}}"  # type: ignore[assignment]  # from the env's action space
     pixels_available: bool = True  # whether env.obs=pixels is possible (a renderer exists)
     coverage_low: list[float] = MISSING
     coverage_high: list[float] = MISSING

@@ -87,8 +87,3 @@ def make_env(cfg: Any, max_steps: int) -> gym.Env:
         ``frame_stack`` frames channel-first, the reset frame repeated at the start. State: the env's vector, float32.
     """
     return _OBS[choice(cfg.obs)](cfg, max_steps)
-
-
-def physical_state(env: gym.Env) -> np.ndarray:
-    """The true physical state of a classic-control env (Acrobot: theta1, theta2, dtheta1, dtheta2)."""
-    return np.asarray(env.unwrapped.state, dtype=np.float64)

@@ -1,12 +1,12 @@
 """Branch the real simulator from any physical state: the true futures of imagined action sequences.
 
 The oracle-model planner and the model-quality probe need what the environment would really show after an action
-sequence, from the state the run is in. Classic-control envs hold their whole physical state in
-``env.unwrapped.state`` and are deterministic given it (Acrobot's torque noise is 0), so one private copy of the env
-can be set to any state and stepped. Observations go through the run's own observation wrappers (same renderer, same
-resizing and gray conversion, bit for bit), and frames are pushed onto a copy of the frame stack. The learned encoder
-must see imagined frames exactly as it sees real ones: frames of the other renderer (0.6 gray levels apart on
-average) moved the oracle's latents enough to swamp the novelty differences between candidates.
+sequence, from the state the run is in. The env's adapter reads and sets its physical state (classic-control envs
+hold all of it in ``env.unwrapped.state`` and are deterministic given it: Acrobot's torque noise is 0), so one private
+copy of the env can be set to any state and stepped. Observations go through the run's own observation wrappers
+(same renderer, same resizing and gray conversion, bit for bit), and frames are pushed onto a copy of the frame stack.
+The learned encoder must see imagined frames exactly as it sees real ones: frames of the other renderer (0.6 gray
+levels apart on average) moved the oracle's latents enough to swamp the novelty differences between candidates.
 """
 
 from __future__ import annotations
@@ -18,7 +18,8 @@ import gymnasium as gym
 import numpy as np
 
 from curiosity.config.build import choice
-from curiosity.envs.make import make_single_obs_env, observe_state, physical_state
+from curiosity.envs.adapter import adapter_of
+from curiosity.envs.make import make_single_obs_env, observe_state
 
 
 @dataclass
@@ -47,22 +48,24 @@ class Simulator:
         self.env: gym.Env = make_single_obs_env(env_cfg, max_steps=10**9)
         self.env.reset(seed=0)
         self.core = self.env.unwrapped
+        self.adapter = adapter_of(env_cfg)
         self.pixels = choice(env_cfg.obs) == "pixels"
 
     def root(self, env: gym.Env, obs: np.ndarray) -> SimStates:
         """The branch point the run is at: its env's physical state and its current observation ``obs``."""
-        return SimStates(physical_state(env)[None].copy(), np.asarray(obs, dtype=np.float32)[None].copy())
+        return SimStates(self.adapter.physical_state(env)[None].copy(), np.asarray(obs, dtype=np.float32)[None].copy())
 
     def step(self, states: SimStates, actions: np.ndarray) -> tuple[SimStates, np.ndarray]:
-        """Step every state with its action: (M,) states, (M,) int actions -> next states and (M,) bool goal flags."""
+        """Step every state with its action: (M,) states, (M,) int actions -> next states and (M,) bool goal flags (the
+        adapter's goal, not any termination)."""
         physical = np.empty_like(states.physical)
         obs = np.empty_like(states.obs)
         goal = np.zeros(len(states), dtype=bool)
         for i, a in enumerate(np.asarray(actions, dtype=np.int64)):
-            self.core.state = states.physical[i].copy()
-            ob, _, terminated, _, _ = self.core.step(int(a))
-            physical[i] = np.asarray(self.core.state, dtype=np.float64)
-            goal[i] = bool(terminated)
+            self.adapter.set_physical_state(self.core, states.physical[i])
+            ob, _, terminated, _, info = self.core.step(int(a))
+            physical[i] = self.adapter.physical_state(self.core)
+            goal[i] = self.adapter.goal_reached(bool(terminated), info)
             obs[i] = self._next_obs(states.obs[i], ob)
         return SimStates(physical, obs), goal
 

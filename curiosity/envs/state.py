@@ -8,6 +8,8 @@ import gymnasium as gym
 import numpy as np
 from gymnasium.wrappers import FrameStackObservation, TimeLimit
 
+from curiosity.envs.adapter import EnvAdapter
+
 
 def _wrappers(env: gym.Env):
     while isinstance(env, gym.Wrapper):
@@ -15,9 +17,9 @@ def _wrappers(env: gym.Env):
         env = env.env
 
 
-def env_state(env: gym.Env) -> dict[str, Any]:
-    """Physical state, the env's RNG, stacked frames and the time-limit counter."""
-    state: dict[str, Any] = {"physical": np.array(env.unwrapped.state, dtype=np.float64),
+def env_state(env: gym.Env, adapter: EnvAdapter) -> dict[str, Any]:
+    """Physical state (read by the env's adapter), the env's RNG, stacked frames and the time-limit counter."""
+    state: dict[str, Any] = {"physical": adapter.physical_state(env).copy(),
                              "np_random": env.unwrapped.np_random.bit_generator.state}  # fmt: skip
     for w in _wrappers(env):
         if isinstance(w, FrameStackObservation):
@@ -27,10 +29,10 @@ def env_state(env: gym.Env) -> dict[str, Any]:
     return state
 
 
-def restore_env(env: gym.Env, state: dict[str, Any], seed: int) -> None:
+def restore_env(env: gym.Env, state: dict[str, Any], seed: int, adapter: EnvAdapter) -> None:
     """Bring a freshly built ``env`` to ``state`` (resets it first so every wrapper is initialised)."""
     env.reset(seed=seed)
-    env.unwrapped.state = np.array(state["physical"], dtype=np.float64)
+    adapter.set_physical_state(env, state["physical"])
     env.unwrapped.np_random.bit_generator.state = state["np_random"]
     for w in _wrappers(env):
         if isinstance(w, FrameStackObservation):

@@ -17,8 +17,8 @@ from tqdm import tqdm
 
 from curiosity.agents.base import Agent
 from curiosity.config import ConfigError, build, sampled_candidates, validate
-from curiosity.envs import GridCoverage, make_env, physical_state
-from curiosity.envs.directed import directed_action_fn
+from curiosity.envs import GridCoverage, make_env
+from curiosity.envs.adapter import adapter_of
 from curiosity.envs.state import env_state, restore_env
 from curiosity.errors import NumericalFault, RunDirectoryError
 from curiosity.runtime.behaviour import BehaviourTracker
@@ -126,19 +126,20 @@ class _Run:
         self.cfg, self.run_dir = cfg, run_dir
         seed_everything(cfg.seed, deterministic=cfg.deterministic, threads=cfg.threads)
         self.env = make_env(cfg.env, cfg.budget.max_steps)
+        self.adapter = adapter_of(cfg.env)
         self.agent: Agent = build(cfg.baseline, cfg=cfg)
         self.agent.attach_env(self.env)
-        self.behaviour = BehaviourTracker(int(self.env.action_space.n), directed_action_fn(cfg.env.id))
+        self.behaviour = BehaviourTracker(int(self.env.action_space.n), self.adapter.directed_action)
         self.coverage = GridCoverage(cfg.env.coverage_low, cfg.env.coverage_high, cfg.env.coverage_bins)
         self.rng = np.random.default_rng(cfg.seed)
-        self.step, self.steps_to_goal, self.wall_before = 0, None, 0.0
+        self.step, self.steps_to_goal, self.wall_before, self.resets = 0, None, 0.0, 0
         self.stop_signal: int | None = None
         self._start: float | None = None  # perf_counter at the start of execute()
         columns = [*CHART_KEYS, *self.behaviour.keys, *self.agent.metric_keys]
         if ckpt is None:
             self.obs, _ = self.env.reset(seed=cfg.seed)
             self.env.action_space.seed(cfg.seed)
-            self.coverage.update(physical_state(self.env))
+            self.coverage.update(self.adapter.physical_state(self.env))
             self.logger = RunLogger(run_dir, columns)
             self.logger.text("config", "```yaml\n" + OmegaConf.to_yaml(cfg, resolve=True) + "```")
             self.save(finished=False)  # step 0: a killed run always has something to resume from
@@ -146,7 +147,8 @@ class _Run:
             self._restore(ckpt, columns)
 
     def _restore(self, ckpt: dict[str, Any], columns: list[str]) -> None:
-        restore_env(self.env, ckpt["env"], self.cfg.seed)
+        restore_env(self.env, ckpt["env"], self.cfg.seed, self.adapter)
+        self.resets = int(ckpt.get("resets", 0))
         self.agent.load_state_dict(ckpt["agent"])
         self.coverage.load_state_dict(ckpt["coverage"])
         self.behaviour.load_state_dict(ckpt["behaviour"])
@@ -161,7 +163,8 @@ class _Run:
         """Checkpoint everything the rest of the run depends on (atomically)."""
         save_checkpoint(self.run_dir, {
             "config": identity(self.cfg), "step": self.step, "finished": finished, "obs": self.obs,
-            "steps_to_goal": self.steps_to_goal, "env": env_state(self.env), "agent": self.agent.state_dict(),
+            "steps_to_goal": self.steps_to_goal, "env": env_state(self.env, self.adapter), "resets": self.resets,
+            "agent": self.agent.state_dict(),
             "coverage": self.coverage.state_dict(), "behaviour": self.behaviour.state_dict(),
             "loop_rng": self.rng.bit_generator.state, "rng": rng_states(), "logger": self.logger.state_dict(),
             "wall_seconds": self._wall(),
@@ -200,13 +203,13 @@ class _Run:
         try:
             while self.step < budget.max_steps and self.steps_to_goal is None:
                 try:
-                    terminated = self._step()
+                    goal = self._step()
                 except NumericalFault as fault:  # stop; keep the last good checkpoint; no NaN row was written
                     raise NumericalFault(fault.term, fault.value, self.step + 1) from None
                 self.step += 1
-                if terminated:
+                if goal:
                     self.steps_to_goal = self.step
-                done = terminated or self.step == budget.max_steps
+                done = goal or self.step == budget.max_steps
                 if self.step % cfg.log_every == 0 or done:
                     self._dump()
                     bar.set_postfix(coverage=f"{self.coverage.fraction:.4f}", refresh=False)
@@ -220,19 +223,27 @@ class _Run:
             bar.close()
 
     def _step(self) -> bool:
-        """One env step (``self.step`` is its 0-based index); returns whether it reached the goal."""
+        """One env step (``self.step`` is its 0-based index); returns whether it reached the goal.
+
+        A termination that is not the goal (the adapter's predicate) is a terminal transition for the agent; the env
+        is then reset and the run goes on from the new episode's first observation."""
         step = self.step
         if step < self.cfg.budget.warmup_steps:
             action = int(self.rng.integers(self.env.action_space.n))
         else:
             action = self.agent.act(self.obs, step)
-            self.logger.record_many(self.behaviour.record(action, physical_state(self.env)))
-        next_obs, reward, terminated, _, _ = self.env.step(action)
+            self.logger.record_many(self.behaviour.record(action, self.adapter.physical_state(self.env)))
+        next_obs, reward, terminated, _, info = self.env.step(action)
+        goal = self.adapter.goal_reached(bool(terminated), info)
         self.logger.record_many(self.agent.observe(self.obs, action, float(reward), next_obs, bool(terminated), step))
         self.logger.record("charts/extrinsic_reward", float(reward))
-        self.coverage.update(physical_state(self.env))
+        self.coverage.update(self.adapter.physical_state(self.env))
         self.obs = next_obs
-        return bool(terminated)
+        if terminated and not goal:
+            self.obs, _ = self.env.reset()
+            self.resets += 1
+            self.coverage.update(self.adapter.physical_state(self.env))
+        return goal
 
     def _dump(self) -> None:
         elapsed = self._wall()
@@ -250,5 +261,5 @@ class _Run:
             warmup_steps=budget.warmup_steps, final_coverage=self.coverage.fraction, wall_seconds=wall,
             steps_per_second=self.step / max(wall, 1e-9), git_commit=commit, git_dirty=dirty,
             planner_sampled_candidates=sampled_candidates(self.cfg),
-            behaviour=self.behaviour.summary(), agent=self.agent.summary(),
+            behaviour=self.behaviour.summary(), agent=self.agent.summary(), episode_resets=self.resets,
         )  # fmt: skip

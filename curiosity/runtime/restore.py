@@ -15,6 +15,7 @@ from omegaconf import DictConfig
 from curiosity.config import build
 from curiosity.config.compose import saved_config
 from curiosity.envs import make_env
+from curiosity.envs.adapter import adapter_of
 from curiosity.envs.state import restore_env
 from curiosity.runtime.checkpoint import CHECKPOINT, load_checkpoint
 
@@ -53,6 +54,6 @@ def restore_run(run_dir: str | Path) -> RestoredRun:
     assert ckpt is not None
     env = make_env(cfg.env, cfg.budget.max_steps)
     agent = build(cfg.baseline, cfg=cfg)
-    restore_env(env, ckpt["env"], int(cfg.seed))
+    restore_env(env, ckpt["env"], int(cfg.seed), adapter_of(cfg.env))
     agent.load_state_dict(ckpt["agent"])
     return RestoredRun(cfg=cfg, env=env, agent=agent, obs=np.asarray(ckpt["obs"]), step=int(ckpt["step"]))

@@ -32,7 +32,8 @@ class RunSummary:
     goal; it is ``None`` when the goal was not reached within ``max_steps`` (a censored run).
     ``planner_sampled_candidates`` is the number of action sequences the MPC planner sampled per step when it could
     not score all of them (``planner.sample_candidates=true``); ``None`` when it scored every one. ``behaviour`` and
-    ``agent`` are absent from runs made before they existed.
+    ``agent`` are absent from runs made before they existed. ``episode_resets`` counts the terminations that were not the
+    goal (none on Acrobot and MountainCar, whose only termination is the goal).
     """
 
     method: str
@@ -51,6 +52,7 @@ class RunSummary:
     planner_sampled_candidates: int | None = None
     behaviour: dict[str, Any] | None = None  # BehaviourTracker.summary(): action frequencies, repeat and directed rates
     agent: dict[str, Any] = field(default_factory=dict)  # the agent's own run totals (Agent.summary())
+    episode_resets: int = 0  # terminations that were not the goal (the env was reset and the run went on)
 
     def write(self, run_dir: str | Path) -> Path:
         """Write ``summary.json`` atomically (temporary file + rename)."""
