@@ -39,8 +39,8 @@ def test_each_baseline_runs_and_names_its_method(tmp_path: Path, baseline: str, 
         assert last[column] != "" and float(last[column]) == float(last[column])  # trained, logged, not NaN
 
 
-def test_nsrs_uses_its_own_parts_whatever_the_groups() -> None:
-    cfg = compose_cfg(["baseline=nsrs", "entropy=renyi", "estimator=kde", "planner=mpc", "env.obs=state", "encoder=mlp"])
+def test_nsrs_is_a_preset_of_its_own_parts() -> None:
+    cfg = compose_cfg(["baseline=nsrs", "env.obs=state", "encoder=mlp"])
     agent = build(cfg.baseline, cfg=cfg)
     assert isinstance(agent.planner, QTreePlanner) and agent.planner.depth == 5 and agent.planner.gamma == 0.8
     assert agent.novelty is not None
@@ -48,8 +48,16 @@ def test_nsrs_uses_its_own_parts_whatever_the_groups() -> None:
     assert isinstance(agent.regulariser, GaussianPotentialRegulariser) and agent.regulariser.t == 2.0
     assert isinstance(agent.optimizer, torch.optim.RMSprop)
     assert agent.optimizer.defaults["lr"] == 2.5e-4 and agent.optimizer.defaults["alpha"] == 0.9
-    assert agent.novelty.input == "state" and agent.intrinsic.weights == {"novelty": 1.0, "pe": 0.0} and agent.q is not None
+    assert agent.novelty.input == "state" and list(agent.intrinsic.terms) == ["novelty"] and agent.q is not None
     assert agent.model.reward_model is None and agent.cfg.n_step == 1 and agent.cfg.batch_size == 64
+    assert not agent.novelty.standardise and agent.cfg.replay_capacity == 10_000
+
+
+def test_nsrs_parts_given_on_the_command_line_replace_the_presets() -> None:
+    """A preset, not a rewrite: an ablation of NSRS names the part it changes."""
+    cfg = compose_cfg(["baseline=nsrs", "entropy=renyi", "n_step=2", "env.obs=state", "encoder=mlp"])
+    assert cfg.entropy.name == "renyi" and cfg.n_step == 2 and cfg.planner.name == "qtree"
+    assert cfg.method_label == "nsrs"
 
 
 def test_nsrs_knn_novelty_matches_a_nearest_neighbour_oracle() -> None:

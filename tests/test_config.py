@@ -143,7 +143,7 @@ def test_bad_ranges_name_seed(arg: str) -> None:
         (["planner.horizon=20"], "planner.horizon=20: 3^20 = 3486784401 candidate sequences exceed planner.max_candidates"),
         (["planner.horizon=6", "planner.max_candidates=700"], "allowed: planner.horizon <= 5"),
         (["planner=qtree", "planner.horizon=11"], "planner.horizon=11: a depth-11 tree has 3^11 = 177147 leaves"),
-        (["baseline=nsrs", "baseline.settings.planner.horizon=0"], "baseline.settings.planner.horizon=0: must be"),
+        (["baseline=nsrs", "planner.horizon=0"], "planner.horizon=0: must be"),
         (["baseline=icm", "intrinsic.terms.icm.lr=-1"], "intrinsic.terms.icm.lr=-1.0: must be a learning rate > 0"),
         (["baseline=rnd", "baseline.gamma=1.5"], "baseline.gamma=1.5: must be a discount in [0, 1]"),
         (["env.obs=state", "encoder=mlp", "encoder.hidden=[64,0]"], "encoder.hidden=[64, 0]: must be"),

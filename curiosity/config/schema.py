@@ -167,6 +167,13 @@ class KDEConfig:
 
 
 @dataclass
+class NSRSKNNConfig:
+    name: str = "nsrs_knn"
+    _target_: str = "curiosity.novelty.estimators.NSRSKNNNovelty"
+    k: int = 5
+
+
+@dataclass
 class KNNConfig:
     name: str = "knn"
     _target_: str = "curiosity.novelty.estimators.KNNNovelty"
@@ -302,14 +309,6 @@ class QAgentConfig(AgentConfig):
     gamma: float = 0.8
 
 
-@dataclass
-class NSRSConfig(AgentConfig):
-    """NSRS: the paper's agent with NSRS's own parts, ``settings`` replacing those nodes of the run config."""
-
-    _recursive_: bool = False
-    settings: Any = MISSING
-
-
 # ---------------------------------------------------------------- budget
 @dataclass
 class BudgetConfig:
@@ -388,7 +387,7 @@ _GROUP_SCHEMAS: dict[str, dict[str, type]] = {
         "renyi_mi": RenyiMIConfig,
         "none": NoEntropyConfig,
     },
-    "estimator": {"kde": KDEConfig, "knn": KNNConfig},
+    "estimator": {"kde": KDEConfig, "knn": KNNConfig, "nsrs_knn": NSRSKNNConfig},
     "backward": {"backward": BackwardConfig},
     "planner": {"mpc": MPCConfig, "qtree": QTreeConfig},
     "intrinsic": {
@@ -398,7 +397,7 @@ _GROUP_SCHEMAS: dict[str, dict[str, type]] = {
         "icm": ICMTermConfig,
         "rnd": RNDTermConfig,
     },
-    "baseline": {"agent": AgentConfig, "q_agent": QAgentConfig, "nsrs": NSRSConfig},
+    "baseline": {"agent": AgentConfig, "q_agent": QAgentConfig},
     "budget": {"budget": BudgetConfig},
 }
 

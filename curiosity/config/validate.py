@@ -223,26 +223,13 @@ def _rule_errors(cfg: DictConfig, rules: list[Rule], prefix: str = "") -> list[s
     return errors
 
 
-def _settings_errors(cfg: DictConfig) -> list[str]:
-    """Range errors of the nodes a baseline's ``settings`` put in place of the run config's (NSRS)."""
-    settings = OmegaConf.select(cfg, "baseline.settings", default=None)
-    if settings is None:
-        return []
-    merged = OmegaConf.create(OmegaConf.to_container(cfg, resolve=True))
-    keys = list(merged.baseline.settings.keys())
-    for key in keys:
-        merged[key] = merged.baseline.settings[key]  # as NSRSAgent applies them: whole nodes replaced
-    rules = [r for r in RULES if r[0].split(".")[0] in keys]
-    return _rule_errors(merged, rules, prefix="baseline.settings.")
-
-
 def validate(cfg: DictConfig, rules: list[Rule] | None = None) -> None:
     """Check every rule whose key is present in ``cfg``, then the keys that depend on each other.
 
     Raises:
         ConfigError: listing every violated key as ``key=value: must be <allowed>`` (or ``...; allowed: ...``).
     """
-    errors = _rule_errors(cfg, RULES if rules is None else rules) + _settings_errors(cfg)
+    errors = _rule_errors(cfg, RULES if rules is None else rules)
     if not errors:
         errors = _cross_field_errors(cfg) + _pairing_errors(cfg) + _planner_errors(cfg) + _intrinsic_errors(cfg)
     if errors:
