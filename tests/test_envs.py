@@ -125,7 +125,7 @@ if "tests/FallingCorridor-v0" not in gym.registry:  # get_class may import this 
 class FallingCorridorAdapter(EnvAdapter):
     """Only the right end is the goal."""
 
-    def goal_reached(self, terminated: bool, info: Mapping[str, Any]) -> bool:
+    def goal_reached(self, env: gym.Env, terminated: bool, info: Mapping[str, Any]) -> bool:
         return bool(terminated and info.get("goal", False))
 
 
@@ -158,4 +158,5 @@ def test_the_acrobot_adapter_reads_and_sets_the_physical_state() -> None:
     state = np.array([0.1, -0.2, 0.3, -0.4])
     adapter.set_physical_state(env, state)
     assert np.array_equal(adapter.physical_state(env), state)
-    assert not adapter.goal_reached(False, {}) and adapter.goal_reached(True, {})  # its termination is its goal
+    assert not adapter.goal_reached(env, False, {}) and adapter.goal_reached(env, True, {})  # termination is its goal
+

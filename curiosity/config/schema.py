@@ -92,7 +92,7 @@ class EnvConfig:
     coverage_low: list[float] = MISSING
     coverage_high: list[float] = MISSING
     coverage_bins: list[int] = MISSING
-    fast_renderer: Any = MISSING
+    fast_renderer: Any = None  # env.renderer=fast: draws 32x32 frames from the physical state (None: not available)
 
 
 # ---------------------------------------------------------------- encoder

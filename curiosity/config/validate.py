@@ -160,6 +160,8 @@ def _pairing_errors(cfg: DictConfig) -> list[str]:
     obs, env = choice(cfg.env.obs), cfg.env.name
     if obs == "pixels" and not cfg.env.pixels_available:
         return [f"env.obs=pixels: env={env} has no pixel observations; allowed: env.obs=state (with encoder=mlp)"]
+    if obs == "pixels" and choice(cfg.env.renderer) == "fast" and cfg.env.get("fast_renderer") is None:
+        return [f"env.renderer=fast: env={env} has no fast renderer; allowed: env.renderer=gym"]
     encoder = OmegaConf.select(cfg, "encoder.name", default=None)
     takes = ENCODER_OBS.get(encoder)
     if takes is None or takes == obs:

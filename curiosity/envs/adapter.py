@@ -46,8 +46,9 @@ class EnvAdapter:
         """Put ``env`` (any wrapper of it) in physical state ``state`` (P,)."""
         env.unwrapped.state = np.array(state, dtype=np.float64)
 
-    def goal_reached(self, terminated: bool, info: Mapping[str, Any]) -> bool:
-        """Whether the step that returned ``terminated`` and ``info`` reached the goal (here: any termination)."""
+    def goal_reached(self, env: gym.Env, terminated: bool, info: Mapping[str, Any]) -> bool:
+        """Whether the step that left ``env`` (any wrapper of it) in its state and returned ``terminated`` and ``info``
+        reached the goal (here: any termination)."""
         return bool(terminated)
 
 

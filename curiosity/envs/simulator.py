@@ -65,7 +65,7 @@ class Simulator:
             self.adapter.set_physical_state(self.core, states.physical[i])
             ob, _, terminated, _, info = self.core.step(int(a))
             physical[i] = self.adapter.physical_state(self.core)
-            goal[i] = self.adapter.goal_reached(bool(terminated), info)
+            goal[i] = self.adapter.goal_reached(self.core, bool(terminated), info)
             obs[i] = self._next_obs(states.obs[i], ob)
         return SimStates(physical, obs), goal
 

@@ -234,7 +234,7 @@ class _Run:
             action = self.agent.act(self.obs, step)
             self.logger.record_many(self.behaviour.record(action, self.adapter.physical_state(self.env)))
         next_obs, reward, terminated, _, info = self.env.step(action)
-        goal = self.adapter.goal_reached(bool(terminated), info)
+        goal = self.adapter.goal_reached(self.env, bool(terminated), info)
         self.logger.record_many(self.agent.observe(self.obs, action, float(reward), next_obs, bool(terminated), step))
         self.logger.record("charts/extrinsic_reward", float(reward))
         self.coverage.update(self.adapter.physical_state(self.env))
