@@ -160,3 +160,16 @@ def test_the_acrobot_adapter_reads_and_sets_the_physical_state() -> None:
     assert np.array_equal(adapter.physical_state(env), state)
     assert not adapter.goal_reached(env, False, {}) and adapter.goal_reached(env, True, {})  # termination is its goal
 
+
+def test_cartpole_goal_is_the_cart_far_out_not_the_pole_falling(tmp_path: Path) -> None:
+    """CartPole-v1 (one YAML and one adapter module): a fallen pole resets the env, |x| > 2 is the goal."""
+    cfg = compose_cfg(["env=cartpole", "encoder=mlp", "baseline=random", "budget=smoke", "progress=false"])
+    summary = run(cfg, tmp_path)
+    assert summary.episode_resets >= 1  # a random policy drops the pole within a few dozen steps
+    assert (cfg.env.n_actions, cfg.env.state_dim) == (2, 4)
+    env, adapter = make_env(cfg.env, 10), adapter_of(cfg.env)
+    env.reset(seed=0)
+    adapter.set_physical_state(env, np.array([2.1, 0.0, 0.0, 0.0]))
+    assert adapter.goal_reached(env, False, {})
+    adapter.set_physical_state(env, np.array([0.0, 0.0, 0.3, 0.0]))
+    assert not adapter.goal_reached(env, True, {})
