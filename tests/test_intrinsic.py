@@ -23,11 +23,12 @@ CONF = Path(__file__).resolve().parents[1] / "conf" / "intrinsic"
 REGISTERED = sorted(p.stem for p in CONF.glob("*.yaml"))
 STATE = ["env.obs=state", "encoder=mlp", "budget=smoke", "budget.warmup_steps=12", "memory_refresh_every=5", "batch_size=8"]
 # (option, extra overrides, agent): every option in both agents, where the agent has the parts it needs
+OBS_OR_LATENT = ("icm", "rnd", "re3")  # read frames by default; on latents they also score imagined steps
 CASES = [(name, ["pe_imagined=ensemble", "transition_ensemble=2"] if name == "pe" else [], "paper")
-         for name in REGISTERED if name not in ("icm", "rnd")]
-CASES += [(name, [f"intrinsic.terms.{name}.input=latent"], "paper") for name in ("icm", "rnd")]
+         for name in REGISTERED if name not in OBS_OR_LATENT]
+CASES += [(name, [f"intrinsic.terms.{name}.input=latent"], "paper") for name in OBS_OR_LATENT]
 CASES += [(name, [], "q") for name in REGISTERED if name not in ("hybrid", "pe")]  # the Q agent has no world model
-CASES += [(name, [f"intrinsic.terms.{name}.input=latent"], "q") for name in ("icm", "rnd")]
+CASES += [(name, [f"intrinsic.terms.{name}.input=latent"], "q") for name in OBS_OR_LATENT]
 
 
 def _agent(option: str, extra: list[str], kind: str) -> PaperAgent | IntrinsicQAgent:
@@ -137,3 +138,23 @@ def test_a_reward_drives_the_other_agent_end_to_end(tmp_path: Path, overrides: l
     assert {f"intrinsic/{name}", "intrinsic/reward"} <= set(header)
     last = dict(zip(header, (tmp_path / "metrics.csv").read_text().splitlines()[-1].split(","), strict=True))
     assert last[f"intrinsic/{name}"] != ""
+
+
+def test_re3_is_the_log_distance_to_the_kth_neighbour_in_a_fixed_random_space() -> None:
+    from curiosity.intrinsic.base import IntrinsicContext
+    from curiosity.intrinsic.re3 import RE3
+
+    re3 = RE3.from_context(context=IntrinsicContext(n_actions=3, obs_shape=(6,), latent_dim=4), k=2, capacity=5)
+    assert not re3.ready and re3.needs_latents is False
+    rng = torch.Generator().manual_seed(0)
+    seen = torch.randn(7, 6, generator=rng)
+    before = copy.deepcopy(re3.encoder.state_dict())
+    re3.observe(TransitionBatch(seen, torch.zeros(7, dtype=torch.long), seen, torch.zeros(7), torch.zeros(7)))
+    assert re3.ready and len(re3.memory) == 5  # first in, first out
+    query = torch.randn(3, 6, generator=rng)
+    batch = TransitionBatch(query, torch.zeros(3, dtype=torch.long), query, torch.zeros(3), torch.zeros(3))
+    with torch.no_grad():
+        y, memory = re3.encoder(query), re3.encoder(seen[2:])
+    expected = torch.log1p(torch.cdist(y, memory).sort(dim=1).values[:, 1])  # the 2nd nearest of the last 5
+    torch.testing.assert_close(re3.compute(batch), expected)
+    assert _same(before, re3.encoder.state_dict()) and re3.update(batch) == {}  # the encoder never trains
