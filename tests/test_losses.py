@@ -173,7 +173,7 @@ def test_the_total_loss_is_one_weighted_sum_over_named_terms() -> None:
     terms = {"transition": x * 1.0, "entropy": torch.tensor(-1.0), "q": x * x}
     weights = LossWeights(transition=0.5, q=2.0, reward=7.0).of_terms()
     loss = total_loss(terms, weights)
-    assert float(loss) == pytest.approx(0.5 * 2 - 1 + 2.0 * 4)  # reward is not a term of this batch: not counted
+    assert loss.item() == pytest.approx(0.5 * 2 - 1 + 2.0 * 4)  # reward is not a term of this batch: not counted
     loss.backward()
     assert float(x.grad) == pytest.approx(0.5 + 2.0 * 2 * 2)
     with pytest.raises(KeyError):
