@@ -73,7 +73,8 @@ def measure(args: argparse.Namespace, seed_dir: Path) -> dict[str, Any]:
     res["train_iter_speedup_vs_baseline"] = base["speedup"]
     res.update(_by_memory({n: planning_at(n, args.repeats) for n in args.memory}))
     size = args.reservoir
-    sampled = {n: planning_at(n, args.repeats, overrides=["memory_mode=reservoir", f"memory_size={size}"])
+    reservoir = ["intrinsic.terms.novelty.memory_mode=reservoir", f"intrinsic.terms.novelty.memory_size={size}"]
+    sampled = {n: planning_at(n, args.repeats, overrides=reservoir)
                for n in args.memory if 0 < size < n}  # fmt: skip
     res["reservoir"] = {"size": size, **_by_memory(sampled)}
     sweep = ["budget=smoke", "budget.max_steps=70"] if args.quick else ["budget=smoke"]

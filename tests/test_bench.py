@@ -62,7 +62,8 @@ def test_planning_at_with_a_reservoir_measures_its_error_against_every_row() -> 
     """A reservoir of 60 of 160 rows: the memory holds 60, and its KDE (bandwidth of the whole stream) differs from
     the exact KDE over all 160 rows, by a sampling error (not 0, and well under the ~1 nat a bandwidth off by the
     sample's wider spacing would add)."""
-    out = planning_at(160, repeats=1, queries=64, overrides=["memory_mode=reservoir", "memory_size=60"])
+    reservoir = ["intrinsic.terms.novelty.memory_mode=reservoir", "intrinsic.terms.novelty.memory_size=60"]
+    out = planning_at(160, repeats=1, queries=64, overrides=reservoir)
     assert out["memory_rows"] == 60
     assert 1e-4 < out["log_rho_error_median"] < 0.5 and out["log_rho_error_p99"] < 3.0, out
 

@@ -36,10 +36,11 @@ def test_public_groups_and_options_exist() -> None:
 
 @pytest.mark.parametrize(("group", "option"), group_options())
 def test_every_option_composes_and_validates(group: str, option: str) -> None:
-    extra = {("encoder", "mlp"): ["env.obs=state"], ("env", "chain"): ["encoder=mlp"],
-             ("intrinsic", "pe"): ["pe_imagined=ensemble", "transition_ensemble=2"],
+    extra = {("encoder", "mlp"): ["env.obs=state"], ("env", "chain"): ["encoder=mlp"], ("env", "cartpole"): ["encoder=mlp"],
+             ("intrinsic", "pe"): ["intrinsic.terms.pe.imagined=ensemble", "transition_ensemble=2"],
              ("intrinsic", "icm"): ["intrinsic.terms.icm.input=latent"],
-             ("intrinsic", "rnd"): ["intrinsic.terms.rnd.input=latent"]}.get((group, option), [])  # the planner imagines
+             ("intrinsic", "rnd"): ["intrinsic.terms.rnd.input=latent"],
+             ("intrinsic", "re3"): ["intrinsic.terms.re3.input=latent"]}.get((group, option), [])  # the planner imagines
     cfg = compose_cfg([f"{group}={option}", *extra])
     resolved = OmegaConf.to_container(cfg, resolve=True)
     assert isinstance(resolved, dict)
@@ -178,19 +179,41 @@ def test_a_long_override_list_gets_a_short_unique_directory_name() -> None:
 
 def test_a_run_made_before_a_key_existed_reads_back_as_it_ran(tmp_path) -> None:
     """``saved_config`` fills a key the run's config lacks with the value that reproduces the run (``LEGACY``), not
-    with today's default: runs made before ``pe_imagined`` existed planned with MC dropout, today's default is off."""
+    with today's default: runs made before the imagined prediction-error option existed planned with MC dropout,
+    today's default is off."""
     from curiosity.config.compose import LEGACY, saved_config
 
     cfg = compose_cfg(["seed=3"])
     now = OmegaConf.to_container(cfg)
-    del now["pe_imagined"], now["planner"]["model"], now["probe_every"]
+    del now["intrinsic"]["terms"]["pe"]["imagined"], now["planner"]["model"], now["probe_every"]
     (tmp_path / ".hydra").mkdir()
     OmegaConf.save(OmegaConf.create(now), tmp_path / ".hydra" / "config.yaml")
     old = saved_config(tmp_path)
-    assert str(cfg.pe_imagined.name) == "off" and LEGACY["pe_imagined"] == "dropout"
-    assert str(old.pe_imagined) in ("dropout", "PEImagined.dropout")
+    assert cfg.intrinsic.terms.pe.imagined.name == "off" and LEGACY["intrinsic.terms.pe.imagined"] == "dropout"
+    assert str(old.intrinsic.terms.pe.imagined) in ("dropout", "PEImagined.dropout")
     assert str(old.planner.model) in ("learned", "PlannerModel.learned") and old.probe_every == 0
     assert old.seed == 3 and old.transition_dropout == cfg.transition_dropout  # saved keys are kept as saved
-    now["pe_imagined"] = "off"
+    now["intrinsic"]["terms"]["pe"]["imagined"] = "off"
     OmegaConf.save(OmegaConf.create(now), tmp_path / ".hydra" / "config.yaml")
-    assert str(saved_config(tmp_path).pe_imagined) in ("off", "PEImagined.off")  # a saved key wins over LEGACY
+    assert str(saved_config(tmp_path).intrinsic.terms.pe.imagined) in ("off", "PEImagined.off")  # saved wins
+
+
+def test_keys_of_runs_made_before_the_intrinsic_group_held_them_are_read_from_their_old_place(tmp_path) -> None:
+    """A run saved with top-level ``hybrid_alpha``, ``pe_imagined``, ``novelty_input`` (no ``intrinsic`` node) reads
+    back with those values in the intrinsic group (``MOVED``); an old run without ``pe_imagined`` gets ``LEGACY``'s."""
+    from curiosity.config.compose import MOVED, saved_config
+
+    now = OmegaConf.to_container(compose_cfg(["seed=3"]))
+    del now["intrinsic"]
+    old_keys = {"hybrid_alpha": 0.0, "novelty_input": "state_action", "memory_refresh_drift": 0.1,
+                "pe_imagined": "ensemble"}  # fmt: skip
+    (tmp_path / ".hydra").mkdir()
+    OmegaConf.save(OmegaConf.create({**now, **old_keys}), tmp_path / ".hydra" / "config.yaml")
+    old = saved_config(tmp_path)
+    assert old.intrinsic.alpha == 0.0 and old.intrinsic.terms.novelty.refresh_drift == 0.1
+    assert str(old.intrinsic.terms.novelty.input) in ("state_action", "NoveltyInput.state_action")
+    assert str(old.intrinsic.terms.pe.imagined) in ("ensemble", "PEImagined.ensemble")
+    assert set(old_keys) <= set(MOVED)
+    del old_keys["pe_imagined"]
+    OmegaConf.save(OmegaConf.create({**now, **old_keys}), tmp_path / ".hydra" / "config.yaml")
+    assert str(saved_config(tmp_path).intrinsic.terms.pe.imagined) in ("dropout", "PEImagined.dropout")

@@ -148,7 +148,7 @@ FAST = ["env.renderer=fast", "progress=false", "budget=smoke", "budget.max_steps
 
 def test_a_run_logs_behaviour_planner_and_probe_columns(tmp_path: Path) -> None:
     # the paper text's stochastic prediction-error term in planning (MC dropout), so that the noise columns exist
-    summary = run(compose_cfg([*FAST, "pe_imagined=dropout", "transition_dropout=0.5"]), tmp_path)
+    summary = run(compose_cfg([*FAST, "intrinsic.terms.pe.imagined=dropout", "transition_dropout=0.5"]), tmp_path)
     header = (tmp_path / "metrics.csv").read_text().splitlines()[0].split(",")
     wanted = {"behaviour/action_0", "behaviour/repeat", "behaviour/directed", "planner/first_action_entropy",
               "planner/spread/novelty", "planner/spread/pe", "planner/noise", "planner/noise_flip", "planner/p_first/2",
@@ -160,9 +160,10 @@ def test_a_run_logs_behaviour_planner_and_probe_columns(tmp_path: Path) -> None:
     assert summary.behaviour == written["behaviour"]
 
 
-@pytest.mark.parametrize("overrides", [["planner.model=oracle", "pe_imagined=off", "planner.temperature=0"],
-                                       ["transition_ensemble=3", "pe_imagined=ensemble", "planner.temperature_scale=spread",
-                                        "memory_refresh_drift=0.1", "transition_dropout=0"]])  # fmt: skip
+@pytest.mark.parametrize("overrides", [["planner.model=oracle", "intrinsic.terms.pe.imagined=off", "planner.temperature=0"],
+                                       ["transition_ensemble=3", "intrinsic.terms.pe.imagined=ensemble",
+                                        "planner.temperature_scale=spread",
+                                        "intrinsic.terms.novelty.refresh_drift=0.1", "transition_dropout=0"]])  # fmt: skip
 def test_oracle_ensemble_spread_and_drift_options_run(tmp_path: Path, overrides: list[str]) -> None:
     summary = run(compose_cfg([*FAST, *overrides]), tmp_path)
     assert summary.env_steps == 90
@@ -222,7 +223,7 @@ def test_probe_command_on_a_run_directory_and_a_refusal(tmp_path: Path, capsys: 
 
 
 def test_pe_estimate_signal_is_measured_on_real_transitions(tmp_path: Path) -> None:
-    summary = run(compose_cfg([*FAST, "budget.max_steps=100", "transition_ensemble=3", "pe_imagined=ensemble",
+    summary = run(compose_cfg([*FAST, "budget.max_steps=100", "transition_ensemble=3", "intrinsic.terms.pe.imagined=ensemble",
                                "transition_dropout=0", "log_every=10"]), tmp_path)  # fmt: skip
     corr = summary.agent["means"]["intrinsic/pe_estimate_corr"]
     assert -1.0 <= corr <= 1.0

@@ -26,8 +26,8 @@ INVALID = [
     (["estimator.bandwidth=-1.5"], "estimator.bandwidth"),
     (["estimator=knn", "estimator.k=0"], "estimator.k"),
     (["estimator=knn", "estimator.k=64"], "estimator.k"),  # no more neighbours than the first memory holds
-    (["hybrid_alpha=1.5"], "hybrid_alpha"),
-    (["hybrid_alpha=-0.1"], "hybrid_alpha"),
+    (["intrinsic.alpha=1.5"], "intrinsic.alpha"),
+    (["intrinsic.alpha=-0.1"], "intrinsic.alpha"),
     (["entropy=renyi", "entropy.alpha=0"], "entropy.alpha"),
     (["entropy=renyi_mi", "entropy.sigma=-2"], "entropy.sigma"),
     (["entropy=renyi", "entropy.base=1"], "entropy.base"),
@@ -43,7 +43,7 @@ INVALID = [
     (["log_every=0"], "log_every"),
     (["checkpoint_every=0"], "checkpoint_every"),
     (["seed=-1"], "seed"),
-    (["memory_refresh_every=0"], "memory_refresh_every"),
+    (["intrinsic.terms.novelty.refresh_every=0"], "intrinsic.terms.novelty.refresh_every"),
     (["env.coverage_bins=[10,10,0,10]"], "env.coverage_bins"),
 ]
 

@@ -21,10 +21,11 @@ from tests.conftest import compose_cfg
 
 CONF = Path(__file__).resolve().parents[1] / "conf" / "intrinsic"
 REGISTERED = sorted(p.stem for p in CONF.glob("*.yaml"))
-STATE = ["env.obs=state", "encoder=mlp", "budget=smoke", "budget.warmup_steps=12", "memory_refresh_every=5", "batch_size=8"]
+STATE = ["env.obs=state", "encoder=mlp", "budget=smoke", "budget.warmup_steps=12", "batch_size=8"]
+WITH_NOVELTY = ("hybrid", "novelty")  # options with a latent novelty term (its memory refreshes every 5 steps here)
 # (option, extra overrides, agent): every option in both agents, where the agent has the parts it needs
 OBS_OR_LATENT = ("icm", "rnd", "re3")  # read frames by default; on latents they also score imagined steps
-CASES = [(name, ["pe_imagined=ensemble", "transition_ensemble=2"] if name == "pe" else [], "paper")
+CASES = [(name, ["intrinsic.terms.pe.imagined=ensemble", "transition_ensemble=2"] if name == "pe" else [], "paper")
          for name in REGISTERED if name not in OBS_OR_LATENT]
 CASES += [(name, [f"intrinsic.terms.{name}.input=latent"], "paper") for name in OBS_OR_LATENT]
 CASES += [(name, [], "q") for name in REGISTERED if name not in ("hybrid", "pe")]  # the Q agent has no world model
@@ -33,7 +34,8 @@ CASES += [(name, [f"intrinsic.terms.{name}.input=latent"], "q") for name in OBS_
 
 def _agent(option: str, extra: list[str], kind: str) -> PaperAgent | IntrinsicQAgent:
     baseline = ["baseline=icm"] if kind == "q" else []  # the Q agent; intrinsic= below picks its reward
-    cfg = compose_cfg([*STATE, *baseline, f"intrinsic={option}", *extra])
+    refresh = ["intrinsic.terms.novelty.refresh_every=5"] if option in WITH_NOVELTY else []
+    cfg = compose_cfg([*STATE, *baseline, f"intrinsic={option}", *refresh, *extra])
     agent = build(cfg.baseline, cfg=cfg)
     assert isinstance(agent, PaperAgent if kind == "paper" else IntrinsicQAgent)
     rng = np.random.default_rng(0)
@@ -90,7 +92,7 @@ def test_every_registered_reward_through_the_interface(option: str, extra: list[
 
 
 def test_the_hybrid_is_the_papers_equation_11() -> None:
-    agent = _agent("hybrid", ["hybrid_alpha=0.3"], "paper")
+    agent = _agent("hybrid", ["intrinsic.alpha=0.3"], "paper")
     batch = _batch(agent)
     terms = agent.intrinsic.compute_terms(batch)
     expected = hybrid_intrinsic_reward(terms["novelty"], terms["pe"], alpha=0.3)
@@ -99,12 +101,13 @@ def test_the_hybrid_is_the_papers_equation_11() -> None:
 
 
 def test_imagined_weights_go_to_the_terms_that_imagine() -> None:
-    """pe_imagined=off: a planner's imagined steps are scored by novelty with the whole weight (the hybrid's total)."""
-    off = _agent("hybrid", ["pe_imagined=off"], "paper").intrinsic
+    """intrinsic.terms.pe.imagined=off: a planner's imagined steps are scored by novelty with the whole weight (the
+    hybrid's total)."""
+    off = _agent("hybrid", ["intrinsic.terms.pe.imagined=off"], "paper").intrinsic
     assert off.imagined_weights() == {"novelty": 1.0}
-    dropout = _agent("hybrid", ["pe_imagined=dropout", "transition_dropout=0.2"], "paper").intrinsic
+    dropout = _agent("hybrid", ["intrinsic.terms.pe.imagined=dropout", "transition_dropout=0.2"], "paper").intrinsic
     assert dropout.imagined_weights() == {"novelty": 0.5, "pe": 0.5} and dropout.stochastic
-    only_pe = _agent("hybrid", ["pe_imagined=off", "hybrid_alpha=1"], "paper").intrinsic
+    only_pe = _agent("hybrid", ["intrinsic.terms.pe.imagined=off", "intrinsic.alpha=1"], "paper").intrinsic
     assert only_pe.imagined_weights() == {"novelty": 1.0}  # novelty's weight is 0, the only term that imagines
     z, a = torch.randn(5, 4), torch.tensor([0, 1, 2, 0, 1])
     terms = off.imagined_terms(z, a, z)
@@ -113,7 +116,7 @@ def test_imagined_weights_go_to_the_terms_that_imagine() -> None:
 
 
 def test_mixture_refuses_weights_that_do_not_match_its_terms() -> None:
-    pe = _agent("pe", ["pe_imagined=ensemble", "transition_ensemble=2"], "paper").intrinsic.terms["pe"]
+    pe = _agent("pe", ["intrinsic.terms.pe.imagined=ensemble", "transition_ensemble=2"], "paper").intrinsic.terms["pe"]
     with pytest.raises(ValueError, match="must name every term"):
         Mixture({"pe": pe}, {"novelty": 1.0})
     with pytest.raises(ValueError, match=">= 0"):

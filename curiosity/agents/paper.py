@@ -102,7 +102,7 @@ class PaperAgent(Agent):
         self.intrinsic: Mixture = build(cfg.intrinsic, context=context)
         if not self.intrinsic.imaginable:
             raise ValueError(f"intrinsic={cfg.intrinsic.name}: no term scores imagined latent steps, which the planner "
-                             "needs; allowed: a latent reward (novelty, pe with pe_imagined=dropout|ensemble, "
+                             "needs; allowed: a latent reward (novelty, pe with intrinsic.terms.pe.imagined=dropout|ensemble, "
                              "icm/rnd with input=latent)")  # fmt: skip
         self.novelty: LatentNovelty | None = self.intrinsic.term(LatentNovelty)  # its memory, for analysis
         b = cfg.budget

@@ -94,9 +94,9 @@ GROUPS = ("env", "encoder", "entropy", "estimator", "backward", "intrinsic", "ba
 # default may differ (the agent study changed ``pe_imagined``'s default from ``dropout`` to ``off``), so a run without
 # the key takes this value, not the default.
 LEGACY: dict[str, Any] = {
-    "pe_imagined": "dropout",
+    "intrinsic.terms.pe.imagined": "dropout",
     "transition_ensemble": 1,
-    "memory_refresh_drift": 0.0,
+    "intrinsic.terms.novelty.refresh_drift": 0.0,
     "probe_every": 0,
     "planner.model": "learned",
     "planner.temperature_scale": "absolute",
@@ -104,6 +104,23 @@ LEGACY: dict[str, Any] = {
     "planner.commit": 1,
 }
 
+
+# Top-level keys of runs made before the intrinsic group held them, and where they are now. A saved run keeps its old
+# keys (its own saved interpolations may read them) and its values are copied to the new places.
+MOVED: dict[str, str] = {
+    "hybrid_alpha": "intrinsic.alpha",
+    "novelty_input": "intrinsic.terms.novelty.input",
+    "action_scale": "intrinsic.terms.novelty.action_scale",
+    "standardise_latents": "intrinsic.terms.novelty.standardise",
+    "memory_mode": "intrinsic.terms.novelty.memory_mode",
+    "memory_size": "intrinsic.terms.novelty.memory_size",
+    "memory_refresh_every": "intrinsic.terms.novelty.refresh_every",
+    "memory_refresh_drift": "intrinsic.terms.novelty.refresh_drift",
+    "pe_imagined": "intrinsic.terms.pe.imagined",
+    "pe_average": "intrinsic.terms.pe.average",
+    "pe_eps": "intrinsic.terms.pe.eps",
+    "pe_dropout_samples": "intrinsic.terms.pe.dropout_samples",
+}
 
 _ABSENT = object()  # OmegaConf.select's default: tells a missing key from a None value
 
@@ -116,7 +133,8 @@ def _defaults(choices: tuple[str, ...]) -> DictConfig:
 
 def saved_config(run_dir: str | Path) -> DictConfig:
     """A run's ``.hydra/config.yaml`` over the current defaults of its group choices: a run made before a key existed
-    gets the value that reproduces what it did (``LEGACY``) or, for keys not listed there, the key's default. When the
+    gets the value that reproduces what it did (``LEGACY``) or, for keys not listed there, the key's default; keys that
+    moved since (``MOVED``) are read from their old place. When the
     choices no longer compose (an option removed since), the saved config alone."""
     setup()
     saved = OmegaConf.load(Path(run_dir) / ".hydra" / "config.yaml")
@@ -126,8 +144,14 @@ def saved_config(run_dir: str | Path) -> DictConfig:
         base = _defaults(tuple(choices)).copy()
         OmegaConf.set_struct(base, False)
         merged = OmegaConf.merge(base, saved)
+        moved_from = {new: old for old, new in MOVED.items()}
+        for old, new in MOVED.items():
+            value = OmegaConf.select(saved, old, default=_ABSENT)
+            parent = new.rpartition(".")[0]
+            if value is not _ABSENT and OmegaConf.select(merged, parent, default=None) is not None:
+                OmegaConf.update(merged, new, value, merge=False)
         for key, value in LEGACY.items():
-            absent = OmegaConf.select(saved, key, default=_ABSENT) is _ABSENT
+            absent = all(OmegaConf.select(saved, k, default=_ABSENT) is _ABSENT for k in (key, moved_from.get(key, key)))
             if absent and OmegaConf.select(base, key, default=_ABSENT) is not _ABSENT:
                 OmegaConf.update(merged, key, value, merge=False)
     except (OmegaConfBaseException, HydraException, ValueError):

@@ -54,7 +54,8 @@ def help_groups() -> str:
 
 
 def one_minus(value: float) -> float:
-    """``${one_minus:x}`` = 1 − x (the novelty weight of the hybrid, 1 − ``hybrid_alpha``)."""
+    """``${one_minus:x}`` = 1 − x (kept for the saved configs of runs made while the hybrid's novelty weight was
+    ``${one_minus:${hybrid_alpha}}``)."""
     return 1.0 - float(value)
 
 

@@ -237,30 +237,39 @@ class MixtureConfig:
 
 
 @dataclass
+class HybridConfig(MixtureConfig):
+    """The paper's hybrid: weights {novelty: 1 − alpha, pe: alpha} (Eq. 11)."""
+
+    _target_: str = "curiosity.intrinsic.mixture.Mixture.hybrid"
+    weights: Any = None  # from alpha
+    alpha: float = 0.5  # α (paper: 0.5)
+
+
+@dataclass
 class LatentNoveltyTermConfig:
-    """Latent novelty (curiosity/intrinsic/latent_novelty.py); its keys follow the top-level ones by default."""
+    """Latent novelty (curiosity/intrinsic/latent_novelty.py): ``intrinsic.terms.novelty.<key>``."""
 
     _target_: str = "curiosity.intrinsic.latent_novelty.LatentNovelty.from_context"
-    estimator: Any = "${estimator}"
-    input: NoveltyInput = "${novelty_input}"  # type: ignore[assignment]
-    action_scale: float = "${action_scale}"  # type: ignore[assignment]
-    standardise: bool = "${standardise_latents}"  # type: ignore[assignment]
-    memory_mode: MemoryMode = "${memory_mode}"  # type: ignore[assignment]
-    memory_size: int = "${memory_size}"  # type: ignore[assignment]
-    refresh_every: int = "${memory_refresh_every}"  # type: ignore[assignment]
-    refresh_drift: float = "${memory_refresh_drift}"  # type: ignore[assignment]
+    estimator: Any = "${estimator}"  # the estimator group
+    input: NoveltyInput = NoveltyInput.state  # state: the state reached (measured better here) | state_action (the text)
+    action_scale: float = 1.0  # c, length of the action part of y (state_action), in latent standard deviations
+    standardise: bool = True  # standardise latents per dimension by the memory's statistics at each refresh
+    memory_mode: MemoryMode = MemoryMode.exact  # exact (every pair) | reservoir (a uniform sample of memory_size)
+    memory_size: int = 100_000
+    refresh_every: int = 10  # env steps between re-embedding the memory with the current encoder
+    refresh_drift: float = 0.0  # also refresh whenever the memory's median drift exceeds this (standardised units)
     scale: float = 1.0
 
 
 @dataclass
 class PredictionErrorTermConfig:
-    """The prediction-error bonus (curiosity/intrinsic/prediction_error.py); keys follow the top-level ones."""
+    """The prediction-error bonus (curiosity/intrinsic/prediction_error.py): ``intrinsic.terms.pe.<key>``."""
 
     _target_: str = "curiosity.intrinsic.prediction_error.PredictionError.from_context"
-    imagined: PEImagined = "${pe_imagined}"  # type: ignore[assignment]
-    dropout_samples: int = "${pe_dropout_samples}"  # type: ignore[assignment]
-    average: Average = "${pe_average}"  # type: ignore[assignment]
-    eps: float = "${pe_eps}"  # type: ignore[assignment]
+    imagined: PEImagined = PEImagined.off  # imagined steps: dropout (MC-dropout disagreement) | ensemble | off
+    dropout_samples: int = 8  # MC-dropout samples per imagined step (imagined=dropout)
+    average: Average = Average.cumulative  # running mean of the error: cumulative | ema
+    eps: float = 1e-8  # epsilon of r_pe = log1p(e / (mean_e + epsilon))
     log_every: int = "${log_every}"  # type: ignore[assignment]
     scale: float = 1.0
 
@@ -356,21 +365,8 @@ class Config:
     normalised_transition: bool = False
     detach_targets: bool = False  # the precursor does not detach; detached targets collapsed the latent here
     replay_capacity: int = 1_000_000
-    # intrinsic reward
-    novelty_input: NoveltyInput = NoveltyInput.state  # measured: better than state_action here (README)
-    action_scale: float = 1.0
-    standardise_latents: bool = True
-    hybrid_alpha: float = 0.5
-    pe_average: Average = Average.cumulative
-    pe_eps: float = 1e-8
-    pe_dropout_samples: int = 8
-    memory_mode: MemoryMode = MemoryMode.exact
-    memory_size: int = 100_000
-    memory_refresh_every: int = 10
     # diagnostics and the agent study (issue 11)
     transition_ensemble: int = 1
-    pe_imagined: PEImagined = PEImagined.dropout
-    memory_refresh_drift: float = 0.0
     probe_every: int = 100
     # Q learning (planner=qtree)
     q_coef: float = 1.0
@@ -392,6 +388,7 @@ _GROUP_SCHEMAS: dict[str, dict[str, type]] = {
     "planner": {"mpc": MPCConfig, "qtree": QTreeConfig},
     "intrinsic": {
         "mixture": MixtureConfig,
+        "hybrid": HybridConfig,
         "novelty": LatentNoveltyTermConfig,
         "pe": PredictionErrorTermConfig,
         "icm": ICMTermConfig,

@@ -37,12 +37,12 @@ RULES: list[Rule] = [
     ("transition_hidden", lambda v: v >= 1, "an integer >= 1"),
     ("transition_dropout", lambda v: 0 <= v < 1, "a probability in [0, 1)"),
     ("replay_capacity", lambda v: v >= 1, "an integer >= 1"),
-    ("action_scale", lambda v: v >= 0, "a number >= 0"),
-    ("hybrid_alpha", lambda v: 0 <= v <= 1, "a weight in [0, 1]"),
-    ("pe_eps", lambda v: v > 0, "a number > 0"),
-    ("pe_dropout_samples", lambda v: v >= 1, "an integer >= 1"),
-    ("memory_size", lambda v: v >= 1, "an integer >= 1"),
-    ("memory_refresh_every", lambda v: v >= 1, "an integer >= 1"),
+    ("intrinsic.terms.novelty.action_scale", lambda v: v >= 0, "a number >= 0"),
+    ("intrinsic.alpha", lambda v: 0 <= v <= 1, "a weight in [0, 1]"),
+    ("intrinsic.terms.pe.eps", lambda v: v > 0, "a number > 0"),
+    ("intrinsic.terms.pe.dropout_samples", lambda v: v >= 1, "an integer >= 1"),
+    ("intrinsic.terms.novelty.memory_size", lambda v: v >= 1, "an integer >= 1"),
+    ("intrinsic.terms.novelty.refresh_every", lambda v: v >= 1, "an integer >= 1"),
     ("q_coef", lambda v: v >= 0, "a number >= 0"),
     ("q_target_every", lambda v: v >= 1, "an integer >= 1"),
     ("env.frame_size", lambda v: v >= 8, "an integer >= 8"),
@@ -76,7 +76,7 @@ RULES: list[Rule] = [
     ("planner.max_candidates", lambda v: v >= 1, "an integer >= 1"),
     ("planner.commit", lambda v: v >= 1, "an integer >= 1 (1: plan at every step)"),
     ("transition_ensemble", lambda v: v >= 1, "an integer >= 1 (1: one transition model)"),
-    ("memory_refresh_drift", lambda v: v >= 0, "a number >= 0 (0: refresh on the schedule only)"),
+    ("intrinsic.terms.novelty.refresh_drift", lambda v: v >= 0, "a number >= 0 (0: refresh on the schedule only)"),
     ("probe_every", lambda v: v >= 0, "an integer >= 0 (0: no model probe)"),
     ("encoder.hidden", lambda v: all(w >= 1 for w in v), "a list of layer widths >= 1"),
     ("baseline.epsilon", lambda v: 0 <= v <= 1, "an exploration probability in [0, 1]"),
@@ -109,8 +109,9 @@ def _cross_field_errors(cfg: DictConfig) -> list[str]:
     k = OmegaConf.select(cfg, "estimator.k", default=None)
     if k is not None and k >= cfg.budget.warmup_steps:
         errors.append(f"estimator.k={k}: must be < budget.warmup_steps={cfg.budget.warmup_steps} (the first memory)")
-    if choice(cfg.pe_imagined) == "ensemble" and cfg.transition_ensemble < 2:
-        errors.append(f"pe_imagined=ensemble: needs transition_ensemble >= 2, got {cfg.transition_ensemble}")
+    imagined = OmegaConf.select(cfg, "intrinsic.terms.pe.imagined", default=None)
+    if imagined is not None and choice(imagined) == "ensemble" and cfg.transition_ensemble < 2:
+        errors.append(f"intrinsic.terms.pe.imagined=ensemble: needs transition_ensemble >= 2, got {cfg.transition_ensemble}")
     from curiosity.runtime.device import device_error, resolve_device  # imports torch: only once the config is read
 
     device = choice(cfg.device) if "device" in cfg else "cpu"
@@ -148,7 +149,8 @@ def _intrinsic_errors(cfg: DictConfig) -> list[str]:
     label = f"intrinsic={cfg.intrinsic.name}"
     if issubclass(agent, PaperAgent) and not any(c.can_imagine(terms[n]) for n, c in classes.items()):
         return [f"{label}: no term scores the planner's imagined latent steps; allowed: a term that does (novelty; pe "
-                "with pe_imagined=dropout or ensemble; icm or rnd with intrinsic.terms.<name>.input=latent)"]  # fmt: skip
+                "with intrinsic.terms.pe.imagined=dropout or ensemble; icm, rnd or re3 with "
+                "intrinsic.terms.<name>.input=latent)"]  # fmt: skip
     if issubclass(agent, IntrinsicQAgent) and (model := [n for n, c in classes.items() if c.needs_model]):
         return [f"{label}: the {', '.join(model)} term needs the paper agent's latent world model, which "
                 f"baseline={cfg.baseline.name} has not; allowed: intrinsic=novelty, icm or rnd"]  # fmt: skip

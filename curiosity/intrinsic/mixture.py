@@ -59,6 +59,17 @@ class Mixture(IntrinsicReward):
         """Build each term from its config node (a ``_target_`` taking ``context``) and weigh them."""
         return cls({name: build(node, context=context) for name, node in terms.items()}, weights, scale)
 
+    @classmethod
+    def hybrid(cls, *, terms: Mapping[str, Any], alpha: float, context: IntrinsicContext, weights: Any = None,
+               scale: float = 1.0) -> Mixture:  # fmt: skip
+        """The paper's hybrid (Eq. 11) of a ``novelty`` and a ``pe`` term: weights {novelty: 1 − α, pe: α}."""
+        if weights is not None:
+            raise ValueError("intrinsic=hybrid weighs its terms by intrinsic.alpha; allowed: intrinsic.alpha=<0..1>")
+        if not 0.0 <= float(alpha) <= 1.0:
+            raise ValueError(f"intrinsic.alpha must be in [0, 1], got {alpha}")
+        return cls.from_config(terms=terms, weights={"novelty": 1.0 - float(alpha), "pe": float(alpha)}, context=context,
+                               scale=scale)  # fmt: skip
+
     def term(self, kind: type[IntrinsicReward]) -> Any:
         """The first term that is a ``kind``, or None (e.g. ``term(LatentNovelty)`` for its memory)."""
         return next((t for t in self.terms.values() if isinstance(t, kind)), None)

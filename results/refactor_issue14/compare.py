@@ -1,20 +1,40 @@
-"""Compare metrics.csv of reference runs before/after the refactor, column by column (shared columns)."""
-import sys, pandas as pd, numpy as np, json, pathlib
-before, after = pathlib.Path(sys.argv[1]), pathlib.Path(sys.argv[2])
-for d in sorted(after.iterdir()):
-    if not d.is_dir(): continue
-    b = before / d.name
-    if not (b / "metrics.csv").exists() or not (d/"metrics.csv").exists(): print(d.name, "missing"); continue
-    x, y = pd.read_csv(b / "metrics.csv"), pd.read_csv(d / "metrics.csv")
-    shared = [c for c in x.columns if c in y.columns and not c.startswith("timing/") and c not in ("wall_seconds","time")]
-    diff = []
-    for c in shared:
-        u, v = x[c].to_numpy(), y[c].to_numpy()
-        if len(u) != len(v): diff.append(f"{c}:len"); continue
-        if u.dtype.kind in "fi" and v.dtype.kind in "fi":
-            same = np.array_equal(np.nan_to_num(u, nan=1e300), np.nan_to_num(v, nan=1e300))
-        else:
-            same = (x[c].astype(str) == y[c].astype(str)).all()
-        if not same: diff.append(c)
-    only = sorted(set(x.columns) ^ set(y.columns))
-    print(d.name, "rows", len(x), len(y), "DIFF:", diff, "| columns only in one:", only)
+"""Compare the metrics.csv of reference runs made before and after a change, column by column, exactly.
+
+python compare.py BEFORE_DIR AFTER_DIR: for every configuration directory in AFTER_DIR, the shared columns that differ
+(timings always do; the timing/* columns are left out) and the columns present on one side only.
+"""
+
+import pathlib
+import sys
+
+import numpy as np
+import pandas as pd
+
+
+def differing(x: pd.DataFrame, y: pd.DataFrame) -> list[str]:
+    out = []
+    for column in (c for c in x.columns if c in y.columns and not c.startswith("timing/")):
+        u, v = x[column].to_numpy(), y[column].to_numpy()
+        if len(u) != len(v):
+            out.append(f"{column}:len")
+        elif u.dtype.kind in "fi" and v.dtype.kind in "fi":
+            if not np.array_equal(np.nan_to_num(u, nan=1e300), np.nan_to_num(v, nan=1e300)):
+                out.append(column)
+        elif not (x[column].astype(str) == y[column].astype(str)).all():
+            out.append(column)
+    return out
+
+
+def main(before: pathlib.Path, after: pathlib.Path) -> None:
+    for run in sorted(p for p in after.iterdir() if p.is_dir()):
+        old, new = before / run.name / "metrics.csv", run / "metrics.csv"
+        if not (old.exists() and new.exists()):
+            print(run.name, "missing")
+            continue
+        x, y = pd.read_csv(old), pd.read_csv(new)
+        only = sorted(set(x.columns) ^ set(y.columns))
+        print(run.name, "rows", len(x), len(y), "DIFF:", differing(x, y), "| columns only in one:", only)
+
+
+if __name__ == "__main__":
+    main(pathlib.Path(sys.argv[1]), pathlib.Path(sys.argv[2]))
