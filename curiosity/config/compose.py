@@ -105,8 +105,8 @@ LEGACY: dict[str, Any] = {
 }
 
 
-# Top-level keys of runs made before the intrinsic group held them, and where they are now. A saved run keeps its old
-# keys (its own saved interpolations may read them) and its values are copied to the new places.
+# Top-level keys of runs made before the intrinsic group held them (up to a6cf5b2), and where they are now: a saved
+# run's values move to the new places.
 MOVED: dict[str, str] = {
     "hybrid_alpha": "intrinsic.alpha",
     "novelty_input": "intrinsic.terms.novelty.input",
@@ -150,6 +150,7 @@ def saved_config(run_dir: str | Path) -> DictConfig:
             parent = new.rpartition(".")[0]
             if value is not _ABSENT and OmegaConf.select(merged, parent, default=None) is not None:
                 OmegaConf.update(merged, new, value, merge=False)
+                del merged[old]  # one place per value (the analysis labels rows by the keys whose values differ)
         for key, value in LEGACY.items():
             absent = all(OmegaConf.select(saved, k, default=_ABSENT) is _ABSENT for k in (key, moved_from.get(key, key)))
             if absent and OmegaConf.select(base, key, default=_ABSENT) is not _ABSENT:

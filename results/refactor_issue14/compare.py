@@ -1,6 +1,7 @@
 """Compare the metrics.csv of reference runs made before and after a change, column by column, exactly.
 
-python compare.py BEFORE_DIR AFTER_DIR: for every configuration directory in AFTER_DIR, the shared columns that differ
+python compare.py BEFORE_DIR AFTER_DIR: for every configuration's metrics.csv in AFTER_DIR (saved as <name>.csv, so the
+analysis commands do not take these copies for runs), the shared columns that differ
 (timings always do; the timing/* columns are left out) and the columns present on one side only.
 """
 
@@ -26,14 +27,14 @@ def differing(x: pd.DataFrame, y: pd.DataFrame) -> list[str]:
 
 
 def main(before: pathlib.Path, after: pathlib.Path) -> None:
-    for run in sorted(p for p in after.iterdir() if p.is_dir()):
-        old, new = before / run.name / "metrics.csv", run / "metrics.csv"
-        if not (old.exists() and new.exists()):
-            print(run.name, "missing")
+    for new in sorted(after.glob("*.csv")):
+        old = before / new.name
+        if not old.exists():
+            print(new.stem, "missing")
             continue
         x, y = pd.read_csv(old), pd.read_csv(new)
         only = sorted(set(x.columns) ^ set(y.columns))
-        print(run.name, "rows", len(x), len(y), "DIFF:", differing(x, y), "| columns only in one:", only)
+        print(new.stem, "rows", len(x), len(y), "DIFF:", differing(x, y), "| columns only in one:", only)
 
 
 if __name__ == "__main__":
