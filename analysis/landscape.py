@@ -4,7 +4,7 @@ Restores a run at its checkpoint and, at ``--states`` states along the agent's o
 branches the real simulator over every action sequence of the planner's horizon, encodes the true futures, and scores
 each sequence's discounted novelty return under the run's estimator refitted to its memory re-embedded now, and under
 variants (KDE with other bandwidth multipliers, kNN). Neither Acrobot nor MountainCar can be solved without pumping
-mechanical energy in (:mod:`curiosity.envs.energy`), so for each variant it prints the mean Spearman correlation
+mechanical energy in (the env adapter's ``energy``), so for each variant it prints the mean Spearman correlation
 between the novelty return and the energy the sequence ends with, how often that correlation is positive, and how
 often the novelty-best first action is the energy-best one (1/3 by chance with three actions).
 """

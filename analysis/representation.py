@@ -4,14 +4,14 @@ Novelty can only guide exploration if the encoder maps states the agent has not 
 check trains the paper agent's world model (the config the overrides compose, as ``runners.train`` would) offline on
 one fixed random-policy dataset, and at each of ``--iters`` gradient iterations encodes two probe sets the model never
 trained on: held-out random-policy states, and states of a policy that pushes with the motion half of the time
-(:mod:`curiosity.envs.directed`), which climbs just past the energies random play reaches: the frontier an exploring
+(the env adapter's ``directed_action``), which climbs just past the energies random play reaches: the frontier an exploring
 agent should find novel. It reports, per checkpoint:
 
 - ``auc``: how often a pumping state is more novel than a held-out random state under the run's estimator fitted to
   the training latents (0.5: novelty cannot tell them apart; 1: every pumping state is more novel);
 - ``auc_physical``: the same estimator on the standardised physical state, the reference a perfect state encoder
   gives;
-- ``rho_energy``: Spearman correlation between latent novelty and mechanical energy (:mod:`curiosity.envs.energy`)
+- ``rho_energy``: Spearman correlation between latent novelty and mechanical energy (the env adapter's ``energy``)
   over both probe sets;
 - ``r2``: how well the latent determines each physical state variable (1-nearest-neighbour regression from the
   training latents to the held-out random states: 1 perfect, ≤ 0 no information).
