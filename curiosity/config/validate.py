@@ -235,6 +235,8 @@ def validate(cfg: DictConfig, rules: list[Rule] | None = None) -> None:
     """
     errors = _rule_errors(cfg, RULES if rules is None else rules)
     if not errors:
-        errors = _cross_field_errors(cfg) + _pairing_errors(cfg) + _planner_errors(cfg) + _intrinsic_errors(cfg)
+        errors = _cross_field_errors(cfg) + _pairing_errors(cfg) + _planner_errors(cfg)
+    if not errors:  # imports the agents' code: only for a config that passed everything else
+        errors = _intrinsic_errors(cfg)
     if errors:
         raise ConfigError(errors)
