@@ -111,8 +111,8 @@ class Mixture(IntrinsicReward):
         return total
 
     def compute(self, batch: TransitionBatch) -> Tensor:
-        return self.combine({name: self.terms[name].compute(batch) for name, w in self.weights.items() if w > 0}
-                            or self.compute_terms(batch))  # fmt: skip
+        active = {name: self.terms[name].compute(batch) for name, w in self.weights.items() if w > 0}
+        return self.combine(active) if active else torch.zeros(len(batch), device=batch.act.device)
 
     def imagined_terms(self, z: Tensor, a: Tensor, z_next: Tensor) -> dict[str, Tensor]:
         """The weighted terms of imagined edges, name -> (N,): z (N, d), a (N,) long, z_next (N, d)."""
