@@ -207,7 +207,7 @@ def _table(rows: list[dict[str, Any]]) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("overrides", nargs="*", help="config overrides, as for runners.train (e.g. internal_dim=8)")
+    parser.add_argument("overrides", nargs="*", help="config overrides, as for runners.train (e.g. agent.internal_dim=8)")
     parser.add_argument("--iters", default="0,300,1000", help="comma-separated iteration counts (default 0,300,1000)")
     parser.add_argument("--train-steps", type=int, default=600, help="random-policy training transitions (600)")
     parser.add_argument("--probe-steps", type=int, default=300, help="states in each probe set (300)")

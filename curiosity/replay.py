@@ -234,7 +234,7 @@ class ReplayBuffer:
         if logical.size and (logical.min() < 0 or logical.max() >= self._size):
             raise IndexError(
                 f"global transition indices {int(np.min(index))}..{int(np.max(index))} are not all stored (the buffer holds "
-                f"{self.total_added - self._size}..{self.total_added - 1}); raise replay_capacity"
+                f"{self.total_added - self._size}..{self.total_added - 1}); raise agent.replay_capacity"
             )
         return logical
 

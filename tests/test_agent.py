@@ -63,11 +63,11 @@ def test_agent_explores_a_chain_better_than_random(tmp_path: Path) -> None:
 
 
 def test_world_model_dropout_disagreement_is_zero_without_dropout() -> None:
-    cfg = compose_cfg(["transition_dropout=0.0"])
+    cfg = compose_cfg(["agent.transition_dropout=0.0"])
     model = build_world_model(cfg)
-    z, a = torch.randn(5, cfg.internal_dim), torch.tensor([0, 1, 2, 0, 1])
+    z, a = torch.randn(5, cfg.agent.internal_dim), torch.tensor([0, 1, 2, 0, 1])
     assert torch.all(model.dropout_disagreement(z, a, samples=4) < 1e-10)  # round-off only
-    cfg = compose_cfg(["transition_dropout=0.5"])
+    cfg = compose_cfg(["agent.transition_dropout=0.5"])
     assert torch.all(build_world_model(cfg).dropout_disagreement(z, a, samples=16) > 0)
 
 
@@ -121,7 +121,7 @@ def test_prediction_error_bonus_is_used_before_it_is_updated() -> None:
     cfg = compose_cfg(["env.obs=state", "encoder=mlp"])
     model = build_world_model(cfg)
     pe = PredictionError(_context(model, ReplayBuffer(10, (6,)), 4))
-    z, a = torch.randn(2, cfg.internal_dim), torch.tensor([0, 1])
+    z, a = torch.randn(2, cfg.agent.internal_dim), torch.tensor([0, 1])
     batch = TransitionBatch(torch.zeros(2, 6), a, torch.zeros(2, 6), torch.zeros(2), torch.zeros(2), z=z, z_next=z + 1.0,
                             index=torch.tensor([10, 11]))  # fmt: skip
     before = pe.real.mean
@@ -165,7 +165,7 @@ def test_refresh_takes_the_random_phase_reference_from_the_memory() -> None:
     for t in range(10):
         nxt = rng.normal(size=6).astype(np.float32)
         replay.add(obs, t % 3, -1.0, nxt, False)
-        cur.add(torch.zeros(cfg.internal_dim), t % 3, t)
+        cur.add(torch.zeros(cfg.agent.internal_dim), t % 3, t)
         obs = nxt
     cur.refresh()
     with torch.no_grad():
@@ -182,7 +182,7 @@ def test_each_observation_is_encoded_once_per_encoder_state() -> None:
 
     for iters, passes in ((0, 1), (1, 2)):
         cfg = compose_cfg(["env.renderer=fast", "budget=smoke", "budget.warmup_steps=4", f"budget.iters_per_train={iters}",
-                           "batch_size=4", "planner.horizon=2", "probe_every=0"])  # fmt: skip
+                           "agent.batch_size=4", "planner.horizon=2", "agent.probe_every=0"])  # fmt: skip
         agent = PaperAgent(cfg)
         env = make_env(cfg.env, 100)
         obs, _ = env.reset(seed=0)
@@ -206,8 +206,8 @@ def test_each_observation_is_encoded_once_per_encoder_state() -> None:
 def test_planner_commit_executes_the_chosen_sequence_before_planning_again() -> None:
     from curiosity.envs import make_env
 
-    cfg = compose_cfg(["env.renderer=fast", "budget=smoke", "budget.warmup_steps=4", "batch_size=4", "planner.horizon=3",
-                       "planner.commit=3", "probe_every=0"])  # fmt: skip
+    cfg = compose_cfg(["env.renderer=fast", "budget=smoke", "budget.warmup_steps=4", "agent.batch_size=4", "planner.horizon=3",
+                       "planner.commit=3", "agent.probe_every=0"])  # fmt: skip
     agent = PaperAgent(cfg)
     env = make_env(cfg.env, 100)
     obs, _ = env.reset(seed=0)

@@ -49,14 +49,14 @@ def test_nsrs_is_a_preset_of_its_own_parts() -> None:
     assert isinstance(agent.optimizer, torch.optim.RMSprop)
     assert agent.optimizer.defaults["lr"] == 2.5e-4 and agent.optimizer.defaults["alpha"] == 0.9
     assert agent.novelty.input == "state" and list(agent.intrinsic.terms) == ["novelty"] and agent.q is not None
-    assert agent.model.reward_model is None and agent.cfg.n_step == 1 and agent.cfg.batch_size == 64
-    assert not agent.novelty.standardise and agent.cfg.replay_capacity == 10_000
+    assert agent.model.reward_model is None and agent.cfg.agent.n_step == 1 and agent.cfg.agent.batch_size == 64
+    assert not agent.novelty.standardise and agent.cfg.agent.replay_capacity == 10_000
 
 
 def test_nsrs_parts_given_on_the_command_line_replace_the_presets() -> None:
     """A preset, not a rewrite: an ablation of NSRS names the part it changes."""
-    cfg = compose_cfg(["baseline=nsrs", "entropy=renyi", "n_step=2", "env.obs=state", "encoder=mlp"])
-    assert cfg.entropy.name == "renyi" and cfg.n_step == 2 and cfg.planner.name == "qtree"
+    cfg = compose_cfg(["baseline=nsrs", "entropy=renyi", "agent.n_step=2", "env.obs=state", "encoder=mlp"])
+    assert cfg.entropy.name == "renyi" and cfg.agent.n_step == 2 and cfg.planner.name == "qtree"
     assert cfg.method_label == "nsrs"
 
 

@@ -69,7 +69,7 @@ def test_planning_at_with_a_reservoir_measures_its_error_against_every_row() -> 
 
 
 def test_seed_runs_time_every_part_and_read_the_summary(tmp_path: Path) -> None:
-    rows = seed_runs([3], ["budget=smoke", "budget.max_steps=70", "env.renderer=fast", "probe_every=0"], tmp_path)
+    rows = seed_runs([3], ["budget=smoke", "budget.max_steps=70", "env.renderer=fast", "agent.probe_every=0"], tmp_path)
     (row,) = rows
     summary = json.loads((tmp_path / "default" / "seed=3" / "summary.json").read_text())
     assert row["wall_s"] == summary["wall_seconds"] and row["steps_to_goal"] == summary["steps_to_goal"]

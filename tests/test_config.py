@@ -37,7 +37,7 @@ def test_public_groups_and_options_exist() -> None:
 @pytest.mark.parametrize(("group", "option"), group_options())
 def test_every_option_composes_and_validates(group: str, option: str) -> None:
     extra = {("encoder", "mlp"): ["env.obs=state"], ("env", "chain"): ["encoder=mlp"], ("env", "cartpole"): ["encoder=mlp"],
-             ("intrinsic", "pe"): ["intrinsic.terms.pe.imagined=ensemble", "transition_ensemble=2"],
+             ("intrinsic", "pe"): ["intrinsic.terms.pe.imagined=ensemble", "agent.transition_ensemble=2"],
              ("intrinsic", "icm"): ["intrinsic.terms.icm.input=latent"],
              ("intrinsic", "rnd"): ["intrinsic.terms.rnd.input=latent"],
              ("intrinsic", "re3"): ["intrinsic.terms.re3.input=latent"]}.get((group, option), [])  # the planner imagines
@@ -185,14 +185,14 @@ def test_a_run_made_before_a_key_existed_reads_back_as_it_ran(tmp_path) -> None:
 
     cfg = compose_cfg(["seed=3"])
     now = OmegaConf.to_container(cfg)
-    del now["intrinsic"]["terms"]["pe"]["imagined"], now["planner"]["model"], now["probe_every"]
+    del now["intrinsic"]["terms"]["pe"]["imagined"], now["planner"]["model"], now["agent"]["probe_every"]
     (tmp_path / ".hydra").mkdir()
     OmegaConf.save(OmegaConf.create(now), tmp_path / ".hydra" / "config.yaml")
     old = saved_config(tmp_path)
     assert cfg.intrinsic.terms.pe.imagined.name == "off" and LEGACY["intrinsic.terms.pe.imagined"] == "dropout"
     assert str(old.intrinsic.terms.pe.imagined) in ("dropout", "PEImagined.dropout")
-    assert str(old.planner.model) in ("learned", "PlannerModel.learned") and old.probe_every == 0
-    assert old.seed == 3 and old.transition_dropout == cfg.transition_dropout  # saved keys are kept as saved
+    assert str(old.planner.model) in ("learned", "PlannerModel.learned") and old.agent.probe_every == 0
+    assert old.seed == 3 and old.agent.transition_dropout == cfg.agent.transition_dropout  # saved keys are kept as saved
     now["intrinsic"]["terms"]["pe"]["imagined"] = "off"
     OmegaConf.save(OmegaConf.create(now), tmp_path / ".hydra" / "config.yaml")
     assert str(saved_config(tmp_path).intrinsic.terms.pe.imagined) in ("off", "PEImagined.off")  # saved wins
@@ -217,3 +217,21 @@ def test_keys_of_runs_made_before_the_intrinsic_group_held_them_are_read_from_th
     del old_keys["pe_imagined"]
     OmegaConf.save(OmegaConf.create({**now, **old_keys}), tmp_path / ".hydra" / "config.yaml")
     assert str(saved_config(tmp_path).intrinsic.terms.pe.imagined) in ("dropout", "PEImagined.dropout")
+
+
+def test_agent_keys_of_runs_made_before_the_agent_node_are_read_from_their_old_place(tmp_path) -> None:
+    """A run saved with the agent's keys at the top level (``batch_size``, ``optimizer``, ... before the ``agent`` node)
+    and its encoder's ``latent_dim: ${internal_dim}`` reads back with them under ``agent`` and the interpolation
+    following the key, each value in one place only."""
+    from curiosity.config.compose import MOVED, saved_config
+
+    now = OmegaConf.to_container(compose_cfg(["seed=3"]), resolve=False)
+    agent = now.pop("agent")
+    old = {**now, **agent, "batch_size": 16, "internal_dim": 6, "optimizer": {"_target_": "torch.optim.SGD", "lr": 0.1}}
+    old["encoder"]["latent_dim"] = "${internal_dim}"
+    (tmp_path / ".hydra").mkdir()
+    OmegaConf.save(OmegaConf.create(old), tmp_path / ".hydra" / "config.yaml")
+    cfg = saved_config(tmp_path)
+    assert cfg.agent.batch_size == 16 and cfg.agent.internal_dim == 6 and cfg.encoder.latent_dim == 6
+    assert cfg.agent.optimizer == {"_target_": "torch.optim.SGD", "lr": 0.1}  # replaced, not merged with Adam's keys
+    assert not set(agent) & set(cfg) and all(f"agent.{key}" == MOVED[key] for key in agent)

@@ -12,13 +12,13 @@ from curiosity.envs import make_env
 from curiosity.runtime.device import resolve_device, to_device
 from tests.conftest import compose_cfg
 
-SMALL = ["env.renderer=fast", "budget=smoke", "budget.warmup_steps=8", "batch_size=4",
+SMALL = ["env.renderer=fast", "budget=smoke", "budget.warmup_steps=8", "agent.batch_size=4",
          "intrinsic.terms.novelty.refresh_every=4"]
 
 
-@pytest.mark.parametrize("overrides", [["planner.horizon=2", "probe_every=3"], ["+experiment=paper_code"],
+@pytest.mark.parametrize("overrides", [["planner.horizon=2", "agent.probe_every=3"], ["+experiment=paper_code"],
                                        ["+experiment=paper_text", "planner.horizon=2"], ["baseline=nsrs"],
-                                       ["planner.horizon=2", "planner.model=oracle", "probe_every=0"]])  # fmt: skip
+                                       ["planner.horizon=2", "planner.model=oracle", "agent.probe_every=0"]])  # fmt: skip
 def test_acting_learning_and_resuming_create_tensors_only_on_the_configured_device(overrides: list[str]) -> None:
     cfg = compose_cfg([*SMALL, *overrides, "device=cpu"])
     agent = build(cfg.baseline, cfg=cfg)  # the paper's agent, or NSRS built on it

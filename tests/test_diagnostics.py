@@ -143,12 +143,12 @@ def test_spread_temperature_ignores_the_scale_and_offset_of_scores() -> None:
 
 # ----------------------------------------------------------------------------- in a run
 FAST = ["env.renderer=fast", "progress=false", "budget=smoke", "budget.max_steps=90", "budget.warmup_steps=40",
-        "probe_every=20"]  # fmt: skip
+        "agent.probe_every=20"]  # fmt: skip
 
 
 def test_a_run_logs_behaviour_planner_and_probe_columns(tmp_path: Path) -> None:
     # the paper text's stochastic prediction-error term in planning (MC dropout), so that the noise columns exist
-    summary = run(compose_cfg([*FAST, "intrinsic.terms.pe.imagined=dropout", "transition_dropout=0.5"]), tmp_path)
+    summary = run(compose_cfg([*FAST, "intrinsic.terms.pe.imagined=dropout", "agent.transition_dropout=0.5"]), tmp_path)
     header = (tmp_path / "metrics.csv").read_text().splitlines()[0].split(",")
     wanted = {"behaviour/action_0", "behaviour/repeat", "behaviour/directed", "planner/first_action_entropy",
               "planner/spread/novelty", "planner/spread/pe", "planner/noise", "planner/noise_flip", "planner/p_first/2",
@@ -161,14 +161,15 @@ def test_a_run_logs_behaviour_planner_and_probe_columns(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize("overrides", [["planner.model=oracle", "intrinsic.terms.pe.imagined=off", "planner.temperature=0"],
-                                       ["transition_ensemble=3", "intrinsic.terms.pe.imagined=ensemble",
+                                       ["agent.transition_ensemble=3", "intrinsic.terms.pe.imagined=ensemble",
                                         "planner.temperature_scale=spread",
-                                        "intrinsic.terms.novelty.refresh_drift=0.1", "transition_dropout=0"]])  # fmt: skip
+                                        "intrinsic.terms.novelty.refresh_drift=0.1",
+                                        "agent.transition_dropout=0"]])  # fmt: skip
 def test_oracle_ensemble_spread_and_drift_options_run(tmp_path: Path, overrides: list[str]) -> None:
     summary = run(compose_cfg([*FAST, *overrides]), tmp_path)
     assert summary.env_steps == 90
     means = summary.agent["means"]
-    if "transition_ensemble=3" in overrides:
+    if "agent.transition_ensemble=3" in overrides:
         assert "memory/drift" in means and "planner/noise" not in means  # an ensemble is deterministic: no noise
     else:
         assert summary.agent["planner_model"] == "oracle"
@@ -183,11 +184,12 @@ def test_ensemble_members_disagree_and_each_trains_on_its_own_loss() -> None:
     from curiosity.types import SegmentBatch
 
     torch.manual_seed(0)
-    cfg = compose_cfg(["env=chain", "encoder=mlp", "transition_ensemble=4", "transition_dropout=0", "internal_dim=2"])
+    cfg = compose_cfg(["env=chain", "encoder=mlp", "agent.transition_ensemble=4", "agent.transition_dropout=0",
+                       "agent.internal_dim=2"])  # fmt: skip
     model = build_world_model(cfg)
     z, a = torch.randn(16, 2), torch.randint(0, 3, (16,))
     assert bool((model.ensemble_disagreement(z, a) > 0).all())
-    single = build_world_model(compose_cfg(["env=chain", "encoder=mlp", "internal_dim=2"]))
+    single = build_world_model(compose_cfg(["env=chain", "encoder=mlp", "agent.internal_dim=2"]))
     assert bool((single.ensemble_disagreement(z, a) == 0).all())
     zs, acts = torch.randn(8, 3, 2, requires_grad=True), torch.randint(0, 3, (8, 2))
     seg = SegmentBatch(obs=torch.zeros(8, 3, 1), act=acts, rewards=torch.zeros(8, 2), terminateds=torch.zeros(8, 2))
@@ -210,7 +212,7 @@ def finished_run(cfg, run_dir: Path) -> None:
 def test_probe_command_on_a_run_directory_and_a_refusal(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     from analysis.probe import main
 
-    finished_run(compose_cfg([*FAST, "probe_every=0"]), tmp_path / "run")
+    finished_run(compose_cfg([*FAST, "agent.probe_every=0"]), tmp_path / "run")
     assert main([str(tmp_path / "run"), "--states", "2", "--every", "2", "--json", str(tmp_path / "p.json")]) == 0
     out = capsys.readouterr().out
     assert "| 3 |" in out and "Spearman" in out
@@ -223,8 +225,9 @@ def test_probe_command_on_a_run_directory_and_a_refusal(tmp_path: Path, capsys: 
 
 
 def test_pe_estimate_signal_is_measured_on_real_transitions(tmp_path: Path) -> None:
-    summary = run(compose_cfg([*FAST, "budget.max_steps=100", "transition_ensemble=3", "intrinsic.terms.pe.imagined=ensemble",
-                               "transition_dropout=0", "log_every=10"]), tmp_path)  # fmt: skip
+    summary = run(compose_cfg([*FAST, "budget.max_steps=100", "agent.transition_ensemble=3",
+                               "intrinsic.terms.pe.imagined=ensemble", "agent.transition_dropout=0", "log_every=10"]),
+                  tmp_path)  # fmt: skip
     corr = summary.agent["means"]["intrinsic/pe_estimate_corr"]
     assert -1.0 <= corr <= 1.0
 
@@ -262,7 +265,7 @@ def test_landscape_command_reports_every_variant_and_refuses_the_chain(
 ) -> None:
     from analysis.landscape import main
 
-    finished_run(compose_cfg([*FAST, "probe_every=0", "planner.horizon=3"]), tmp_path / "run")
+    finished_run(compose_cfg([*FAST, "agent.probe_every=0", "planner.horizon=3"]), tmp_path / "run")
     assert main([str(tmp_path / "run"), "--states", "2", "--bandwidths", "2", "0.5"]) == 0
     out = capsys.readouterr().out
     assert "kde h=2×median NN" in out and "kde h=0.5×median NN" in out and "knn k=5" in out
@@ -277,8 +280,8 @@ def test_diagnostics_do_not_change_what_the_agent_does(tmp_path: Path) -> None:
     """The noise check and the probe draw dropout masks in a forked RNG: the actions are the same without them
     (same config, seed and machine, one thread: exact)."""
     common = [*FAST, "deterministic=true"]
-    with_probe = run(compose_cfg([*common, "probe_every=10"]), tmp_path / "a")
-    without = run(compose_cfg([*common, "probe_every=0"]), tmp_path / "b")
+    with_probe = run(compose_cfg([*common, "agent.probe_every=10"]), tmp_path / "a")
+    without = run(compose_cfg([*common, "agent.probe_every=0"]), tmp_path / "b")
     assert with_probe.behaviour == without.behaviour  # exact: same seed, same machine, deterministic mode
     rows = [(tmp_path / d / "metrics.csv").read_text().splitlines() for d in ("a", "b")]
     col = rows[0][0].split(",").index("intrinsic/reward")

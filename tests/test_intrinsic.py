@@ -21,11 +21,11 @@ from tests.conftest import compose_cfg
 
 CONF = Path(__file__).resolve().parents[1] / "conf" / "intrinsic"
 REGISTERED = sorted(p.stem for p in CONF.glob("*.yaml"))
-STATE = ["env.obs=state", "encoder=mlp", "budget=smoke", "budget.warmup_steps=12", "batch_size=8"]
+STATE = ["env.obs=state", "encoder=mlp", "budget=smoke", "budget.warmup_steps=12", "agent.batch_size=8"]
 WITH_NOVELTY = ("hybrid", "novelty")  # options with a latent novelty term (its memory refreshes every 5 steps here)
 # (option, extra overrides, agent): every option in both agents, where the agent has the parts it needs
 OBS_OR_LATENT = ("icm", "rnd", "re3")  # read frames by default; on latents they also score imagined steps
-CASES = [(name, ["intrinsic.terms.pe.imagined=ensemble", "transition_ensemble=2"] if name == "pe" else [], "paper")
+CASES = [(name, ["intrinsic.terms.pe.imagined=ensemble", "agent.transition_ensemble=2"] if name == "pe" else [], "paper")
          for name in REGISTERED if name not in OBS_OR_LATENT]
 CASES += [(name, [f"intrinsic.terms.{name}.input=latent"], "paper") for name in OBS_OR_LATENT]
 CASES += [(name, [], "q") for name in REGISTERED if name not in ("hybrid", "pe")]  # the Q agent has no world model
@@ -106,7 +106,7 @@ def test_imagined_weights_go_to_the_terms_that_imagine() -> None:
     hybrid's total)."""
     off = _agent("hybrid", ["intrinsic.terms.pe.imagined=off"], "paper").intrinsic
     assert off.imagined_weights() == {"novelty": 1.0}
-    dropout = _agent("hybrid", ["intrinsic.terms.pe.imagined=dropout", "transition_dropout=0.2"], "paper").intrinsic
+    dropout = _agent("hybrid", ["intrinsic.terms.pe.imagined=dropout", "agent.transition_dropout=0.2"], "paper").intrinsic
     assert dropout.imagined_weights() == {"novelty": 0.5, "pe": 0.5} and dropout.stochastic
     only_pe = _agent("hybrid", ["intrinsic.terms.pe.imagined=off", "intrinsic.alpha=1"], "paper").intrinsic
     assert only_pe.imagined_weights() == {"novelty": 1.0}  # novelty's weight is 0, the only term that imagines
@@ -117,7 +117,7 @@ def test_imagined_weights_go_to_the_terms_that_imagine() -> None:
 
 
 def test_mixture_refuses_weights_that_do_not_match_its_terms() -> None:
-    pe = _agent("pe", ["intrinsic.terms.pe.imagined=ensemble", "transition_ensemble=2"], "paper").intrinsic.terms["pe"]
+    pe = _agent("pe", ["intrinsic.terms.pe.imagined=ensemble", "agent.transition_ensemble=2"], "paper").intrinsic.terms["pe"]
     with pytest.raises(ValueError, match="must name every term"):
         Mixture({"pe": pe}, {"novelty": 1.0})
     with pytest.raises(ValueError, match=">= 0"):

@@ -60,16 +60,17 @@ def obs_shape_of(env_cfg: DictConfig) -> tuple[int, ...]:
 
 def build_world_model(cfg: DictConfig) -> WorldModel:
     """Encoder (``encoder`` group), residual transition, reward model (if λ_R > 0), backward predictor (if on)."""
-    d, n_actions = cfg.internal_dim, cfg.env.n_actions
-    reward = RewardModel(d, n_actions) if cfg.reward_coef > 0 else None
+    own, n_actions = cfg.agent, cfg.env.n_actions
+    d = own.internal_dim
+    reward = RewardModel(d, n_actions) if own.reward_coef > 0 else None
     b = cfg.backward
     backward = BackwardPredictor(d, n_actions, n_candidates=b.n_candidates, noise_dim=b.noise_dim,
                                  hidden=b.hidden) if b.coef > 0 else None  # fmt: skip
-    if cfg.transition_ensemble > 1:
+    if own.transition_ensemble > 1:
         transition: torch.nn.Module = TransitionEnsemble(
-            d, n_actions, size=cfg.transition_ensemble, hidden=cfg.transition_hidden, dropout=cfg.transition_dropout)
+            d, n_actions, size=own.transition_ensemble, hidden=own.transition_hidden, dropout=own.transition_dropout)
     else:
-        transition = ResidualTransition(d, n_actions, hidden=cfg.transition_hidden, dropout=cfg.transition_dropout)
+        transition = ResidualTransition(d, n_actions, hidden=own.transition_hidden, dropout=own.transition_dropout)
     return WorldModel(build(cfg.encoder), transition, n_actions, reward, backward)
 
 
@@ -83,20 +84,20 @@ class PaperAgent(Agent):
         self.device = resolve_device(choice(OmegaConf.select(cfg, "device", default="cpu")))
         self.model = build_world_model(cfg).to(self.device)
         self.regulariser = build(cfg.entropy)
-        self.weights = LossWeights(transition=cfg.transition_coef, reward=cfg.reward_coef, backward=cfg.backward.coef,
-                                   q=cfg.q_coef, sigma_b=cfg.backward.sigma_b,
-                                   normalised_transition=cfg.normalised_transition,
-                                   detach_targets=cfg.detach_targets)  # fmt: skip
+        own = cfg.agent
+        self.weights = LossWeights(transition=own.transition_coef, reward=own.reward_coef, backward=cfg.backward.coef,
+                                   q=own.q_coef, sigma_b=cfg.backward.sigma_b, normalised_transition=own.normalised_transition,
+                                   detach_targets=own.detach_targets)  # fmt: skip
         self.planner: Planner = build(cfg.planner)
-        self.q = (QLearner(self.model.encoder, cfg.internal_dim, self.n_actions, gamma=cfg.planner.gamma,
-                           target_every=cfg.q_target_every, huber=cfg.q_huber)
+        self.q = (QLearner(self.model.encoder, own.internal_dim, self.n_actions, gamma=cfg.planner.gamma,
+                           target_every=own.q_target_every, huber=own.q_huber)
                   if self.planner.needs_q else None)  # fmt: skip
         if self.q is not None:
             self.q.to(self.device)
         params = list(self.model.parameters()) + (list(self.q.q.parameters()) if self.q else [])
-        self.optimizer = build(cfg.optimizer, params=params)
-        self.replay = ReplayBuffer(cfg.replay_capacity, obs_shape_of(cfg.env), pixel_uint8=self.obs_pixels)
-        context = IntrinsicContext(n_actions=self.n_actions, obs_shape=obs_shape_of(cfg.env), latent_dim=cfg.internal_dim,
+        self.optimizer = build(own.optimizer, params=params)
+        self.replay = ReplayBuffer(own.replay_capacity, obs_shape_of(cfg.env), pixel_uint8=self.obs_pixels)
+        context = IntrinsicContext(n_actions=self.n_actions, obs_shape=obs_shape_of(cfg.env), latent_dim=own.internal_dim,
                                    warmup_steps=cfg.budget.warmup_steps, seed=int(cfg.seed), device=self.device,
                                    replay=self.replay, encode=self._encode_eval, model=self.model)  # fmt: skip
         self.intrinsic: Mixture = build(cfg.intrinsic, context=context)
@@ -111,7 +112,7 @@ class PaperAgent(Agent):
         self.rng = np.random.default_rng([int(cfg.seed), 2])
         self.generator = torch.Generator().manual_seed(int(cfg.seed))
         self.oracle = choice(OmegaConf.select(cfg, "planner.model", default="learned")) == "oracle"
-        self.probe_every = int(cfg.probe_every) if isinstance(self.planner, MPCPlanner) else 0  # it scores with MPC
+        self.probe_every = int(own.probe_every) if isinstance(self.planner, MPCPlanner) else 0  # it scores with MPC
         first = tuple(f"planner/p_first/{a}" for a in range(self.n_actions))
         probe = probe_keys(cfg.planner.horizon) if self.probe_every else ()
         spread = tuple(f"planner/spread/{name}" for name in self.intrinsic.terms)  # each term's spread across candidates
@@ -272,7 +273,7 @@ class PaperAgent(Agent):
 
     def _iteration(self) -> tuple[dict[str, float], float]:
         """One gradient step on L = Σ_k w_k L_k: the representation terms, and the TD term of a Q-tree agent."""
-        seg = self.replay.sample_segments(self.cfg.batch_size, self.cfg.n_step, self.rng).to(self.device)
+        seg = self.replay.sample_segments(self.cfg.agent.batch_size, self.cfg.agent.n_step, self.rng).to(self.device)
         enc = encode_segments(self.model, seg)
         terms, logs = representation_terms(self.model, seg, enc, self.regulariser, self.weights)
         first = seg.first_step().with_latents(enc.z[:, 0].detach(), enc.z[:, 1].detach())

@@ -1,6 +1,6 @@
 """A double-DQN agent driven by a pluggable intrinsic reward: how the ICM and RND baselines act.
 
-The Q-function sits on a learned latent of the same size as the paper's agent (``internal_dim``), from the same
+The Q-function sits on a learned latent of the same size as the paper's agent (``agent.internal_dim``), from the same
 encoder architecture (``encoder`` group), trained by TD only; targets are r_ext + r_int with r_int from the
 intrinsic-reward module; actions are greedy in Q (ε = ``epsilon``, 0 as in NSRS's baselines), after the same random
 warm-up and with the same training schedule (``budget``) as every other agent, so only the exploration method differs.
@@ -33,7 +33,7 @@ class IntrinsicQAgent(Agent):
     """Greedy double-DQN on r_ext + r_int.
 
     Args:
-        cfg: the run config (``internal_dim``, ``encoder``, ``optimizer``, ``batch_size``, ``budget``, ``intrinsic``
+        cfg: the run config (``agent.*``, ``encoder``, ``budget``, ``intrinsic``
             (the reward, built with this agent's encoder and replay; no world model, so no prediction-error term), ...).
         epsilon: probability of a uniformly random action after the warm-up.
         gamma: discount of the Q-learning.
@@ -44,11 +44,12 @@ class IntrinsicQAgent(Agent):
         self.n_actions, self.epsilon = int(cfg.env.n_actions), float(epsilon)
         obs_shape = obs_shape_of(cfg.env)
         self.encoder = build(cfg.encoder)
-        self.q = QLearner(self.encoder, cfg.internal_dim, self.n_actions, gamma=gamma, target_every=cfg.q_target_every,
-                          huber=cfg.q_huber)  # fmt: skip
-        self.optimizer = build(cfg.optimizer, params=[*self.encoder.parameters(), *self.q.q.parameters()])
-        self.replay = ReplayBuffer(cfg.replay_capacity, obs_shape, pixel_uint8=choice(cfg.env.obs) == "pixels")
-        context = IntrinsicContext(n_actions=self.n_actions, obs_shape=obs_shape, latent_dim=cfg.internal_dim,
+        own = cfg.agent  # internal_dim, q_target_every, q_huber, optimizer, replay_capacity, batch_size
+        self.q = QLearner(self.encoder, own.internal_dim, self.n_actions, gamma=gamma, target_every=own.q_target_every,
+                          huber=own.q_huber)  # fmt: skip
+        self.optimizer = build(own.optimizer, params=[*self.encoder.parameters(), *self.q.q.parameters()])
+        self.replay = ReplayBuffer(own.replay_capacity, obs_shape, pixel_uint8=choice(cfg.env.obs) == "pixels")
+        context = IntrinsicContext(n_actions=self.n_actions, obs_shape=obs_shape, latent_dim=own.internal_dim,
                                    warmup_steps=cfg.budget.warmup_steps, seed=int(cfg.seed), replay=self.replay,
                                    encode=self._encode_eval)  # fmt: skip
         self.intrinsic: Mixture = build(cfg.intrinsic, context=context)
@@ -108,7 +109,7 @@ class IntrinsicQAgent(Agent):
         return logs
 
     def _iteration(self) -> dict[str, float]:
-        batch = self._with_latents(self.replay.sample_transitions(self.cfg.batch_size, self.rng))
+        batch = self._with_latents(self.replay.sample_transitions(self.cfg.agent.batch_size, self.rng))
         with torch.no_grad():
             r_int = self.intrinsic(batch) if self.intrinsic.ready else torch.zeros_like(batch.rewards)
             z_next = self.encoder(batch.next_obs)

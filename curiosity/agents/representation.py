@@ -33,8 +33,8 @@ def check_finite(term: str, value: Tensor) -> None:
 class LossWeights:
     """The config weights of the named loss terms, L = Σ_k w_k L_k (:func:`total_loss`), and the losses' options.
 
-    ``transition`` = ``transition_coef``, ``reward`` = ``reward_coef`` (λ_R), ``backward`` = ``backward.coef``
-    (λ_back), ``q`` = ``q_coef`` (the TD loss of Q-tree agents); the entropy regulariser weighs itself
+    ``transition`` = ``agent.transition_coef``, ``reward`` = ``agent.reward_coef`` (λ_R), ``backward`` =
+    ``backward.coef`` (λ_back), ``q`` = ``agent.q_coef`` (the TD loss of Q-tree agents); the entropy regulariser weighs itself
     (``entropy.coef``), so its weight here is 1.
     """
 

@@ -12,7 +12,7 @@ from typing import Any
 from hydra import compose, initialize_config_dir
 from hydra.core.override_parser.overrides_parser import OverridesParser
 from hydra.errors import HydraException, MissingConfigException, OverrideParseException
-from omegaconf import DictConfig, OmegaConf
+from omegaconf import DictConfig, ListConfig, OmegaConf
 from omegaconf.errors import ConfigAttributeError, ConfigKeyError, OmegaConfBaseException
 
 from curiosity.config import setup
@@ -76,6 +76,9 @@ def describe_compose_error(err: Exception, overrides: Sequence[str]) -> str:
     cause = err.__cause__
     if isinstance(cause, OmegaConfBaseException) and getattr(cause, "full_key", None):
         key = str(cause.full_key)
+        if isinstance(cause, (ConfigAttributeError, ConfigKeyError)) and key in MOVED:
+            return (f"{_override_of(key, overrides)}: {key} moved to {MOVED[key]}; allowed: {MOVED[key]}=<value> "
+                    "(`python -m runners.train --help` lists the keys)")  # fmt: skip
         if isinstance(cause, (ConfigAttributeError, ConfigKeyError)):
             return (f"{_override_of(key, overrides)}: {key} is not a key of this configuration; allowed: the keys "
                     "`python -m runners.train --help` lists")  # fmt: skip
@@ -95,9 +98,9 @@ GROUPS = ("env", "encoder", "entropy", "estimator", "backward", "intrinsic", "ba
 # the key takes this value, not the default.
 LEGACY: dict[str, Any] = {
     "intrinsic.terms.pe.imagined": "dropout",
-    "transition_ensemble": 1,
+    "agent.transition_ensemble": 1,
     "intrinsic.terms.novelty.refresh_drift": 0.0,
-    "probe_every": 0,
+    "agent.probe_every": 0,
     "planner.model": "learned",
     "planner.temperature_scale": "absolute",
     "planner.sample_candidates": False,
@@ -105,9 +108,13 @@ LEGACY: dict[str, Any] = {
 }
 
 
-# Top-level keys of runs made before the intrinsic group held them (up to a6cf5b2), and where they are now: a saved
-# run's values move to the new places.
+# Top-level keys of runs made before the intrinsic group held them (up to a6cf5b2) or before the agent node did (up to
+# dfebfdf), and where they are now: a saved run's values move to the new places (and interpolations follow them).
+AGENT_KEYS = ("internal_dim", "n_step", "batch_size", "optimizer", "transition_coef", "reward_coef", "transition_hidden",
+              "transition_dropout", "normalised_transition", "detach_targets", "replay_capacity", "transition_ensemble",
+              "probe_every", "q_coef", "q_target_every", "q_huber")  # fmt: skip
 MOVED: dict[str, str] = {
+    **{key: f"agent.{key}" for key in AGENT_KEYS},
     "hybrid_alpha": "intrinsic.alpha",
     "novelty_input": "intrinsic.terms.novelty.input",
     "action_scale": "intrinsic.terms.novelty.action_scale",
@@ -123,6 +130,21 @@ MOVED: dict[str, str] = {
 }
 
 _ABSENT = object()  # OmegaConf.select's default: tells a missing key from a None value
+_INTERPOLATED_KEY = re.compile(r"\$\{(\w+)\}")
+
+
+def _follow_moves(node: DictConfig | ListConfig, moved: dict[str, str]) -> None:
+    """Point interpolations of moved keys at their new place (``${internal_dim}`` -> ``${agent.internal_dim}``)."""
+    for key in node.keys() if isinstance(node, DictConfig) else range(len(node)):
+        child = node._get_node(key)  # the node itself: its interpolation unresolved
+        if isinstance(child, (DictConfig, ListConfig)):
+            _follow_moves(child, moved)
+            continue
+        value = child._value() if child is not None else None
+        if isinstance(value, str) and "${" in value:
+            new = _INTERPOLATED_KEY.sub(lambda found: "${" + moved.get(found[1], found[1]) + "}", value)
+            if new != value:
+                node[key] = new
 
 
 @functools.lru_cache(maxsize=64)
@@ -151,6 +173,7 @@ def saved_config(run_dir: str | Path) -> DictConfig:
             if value is not _ABSENT and OmegaConf.select(merged, parent, default=None) is not None:
                 OmegaConf.update(merged, new, value, merge=False)
                 del merged[old]  # one place per value (the analysis labels rows by the keys whose values differ)
+        _follow_moves(merged, MOVED)
         for key, value in LEGACY.items():
             absent = all(OmegaConf.select(saved, k, default=_ABSENT) is _ABSENT for k in (key, moved_from.get(key, key)))
             if absent and OmegaConf.select(base, key, default=_ABSENT) is not _ABSENT:

@@ -101,7 +101,7 @@ class ConvEncoderConfig:
     name: str = "conv"
     _target_: str = "curiosity.nets.encoders.ConvEncoder"
     in_channels: int = "${env.frame_stack}"  # type: ignore[assignment]
-    latent_dim: int = "${internal_dim}"  # type: ignore[assignment]
+    latent_dim: int = "${agent.internal_dim}"  # type: ignore[assignment]
     frame_size: int = "${env.frame_size}"  # type: ignore[assignment]
 
 
@@ -110,7 +110,7 @@ class MLPEncoderConfig:
     name: str = "mlp"
     _target_: str = "curiosity.nets.encoders.MLPEncoder"
     in_dim: int = "${env.state_dim}"  # type: ignore[assignment]
-    latent_dim: int = "${internal_dim}"  # type: ignore[assignment]
+    latent_dim: int = "${agent.internal_dim}"  # type: ignore[assignment]
     hidden: list[int] = field(default_factory=lambda: [200, 100, 50, 10])
 
 
@@ -331,6 +331,33 @@ class BudgetConfig:
     early_stop_threshold: float = 0.00390625
 
 
+# ---------------------------------------------------------------- agent (the learning agents' own keys)
+@dataclass
+class AgentKeysConfig:
+    """``agent.<key>``: what the learning agents train with (the paper's agent and NSRS read every key; the Q agent of
+    ICM/RND reads ``internal_dim``, ``batch_size``, ``optimizer``, ``replay_capacity`` and ``q_*``; random reads none)."""
+
+    # representation learning
+    internal_dim: int = 4
+    n_step: int = 2
+    batch_size: int = 32
+    optimizer: Any = field(default_factory=lambda: {"_target_": "torch.optim.Adam", "lr": 5e-3})
+    transition_coef: float = 1.0
+    reward_coef: float = 1.0
+    transition_hidden: int = 10
+    transition_dropout: float = 0.5
+    normalised_transition: bool = False
+    detach_targets: bool = False  # the precursor does not detach; detached targets collapsed the latent here
+    replay_capacity: int = 1_000_000
+    # diagnostics and the agent study (issue 11)
+    transition_ensemble: int = 1
+    probe_every: int = 100
+    # Q learning (planner=qtree, and the Q agent)
+    q_coef: float = 1.0
+    q_target_every: int = 1000
+    q_huber: bool = True
+
+
 # ---------------------------------------------------------------- top level
 @dataclass
 class Config:
@@ -353,26 +380,7 @@ class Config:
     resume: bool = True  # re-running the same command on an existing run directory resumes its checkpoint
     checkpoint_every: int = 500  # env steps between checkpoints (also written at the end and on SIGTERM/SIGINT)
     method_label: str = "${baseline.label}"
-    # representation learning
-    internal_dim: int = 4
-    n_step: int = 2
-    batch_size: int = 32
-    optimizer: Any = field(default_factory=lambda: {"_target_": "torch.optim.Adam", "lr": 5e-3})
-    transition_coef: float = 1.0
-    reward_coef: float = 1.0
-    transition_hidden: int = 10
-    transition_dropout: float = 0.5
-    normalised_transition: bool = False
-    detach_targets: bool = False  # the precursor does not detach; detached targets collapsed the latent here
-    replay_capacity: int = 1_000_000
-    # diagnostics and the agent study (issue 11)
-    transition_ensemble: int = 1
-    probe_every: int = 100
-    # Q learning (planner=qtree)
-    q_coef: float = 1.0
-    q_target_every: int = 1000
-    q_huber: bool = True
-
+    agent: AgentKeysConfig = field(default_factory=AgentKeysConfig)
 
 _GROUP_SCHEMAS: dict[str, dict[str, type]] = {
     "env": {"env": EnvConfig},

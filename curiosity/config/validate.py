@@ -28,23 +28,23 @@ RULES: list[Rule] = [
     ("threads", lambda v: v >= 1, "an integer >= 1"),
     ("log_every", lambda v: v >= 1, "an integer >= 1"),
     ("checkpoint_every", lambda v: v >= 1, "an integer >= 1"),
-    ("internal_dim", lambda v: v >= 1, "an integer >= 1"),
-    ("n_step", lambda v: v >= 1, "an integer >= 1"),
-    ("batch_size", lambda v: v >= 2, "an integer >= 2"),
-    ("optimizer.lr", lambda v: isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0, "a learning rate > 0"),
-    ("transition_coef", lambda v: v >= 0, "a number >= 0"),
-    ("reward_coef", lambda v: v >= 0, "a number >= 0"),
-    ("transition_hidden", lambda v: v >= 1, "an integer >= 1"),
-    ("transition_dropout", lambda v: 0 <= v < 1, "a probability in [0, 1)"),
-    ("replay_capacity", lambda v: v >= 1, "an integer >= 1"),
+    ("agent.internal_dim", lambda v: v >= 1, "an integer >= 1"),
+    ("agent.n_step", lambda v: v >= 1, "an integer >= 1"),
+    ("agent.batch_size", lambda v: v >= 2, "an integer >= 2"),
+    ("agent.optimizer.lr", lambda v: isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0, "a learning rate > 0"),
+    ("agent.transition_coef", lambda v: v >= 0, "a number >= 0"),
+    ("agent.reward_coef", lambda v: v >= 0, "a number >= 0"),
+    ("agent.transition_hidden", lambda v: v >= 1, "an integer >= 1"),
+    ("agent.transition_dropout", lambda v: 0 <= v < 1, "a probability in [0, 1)"),
+    ("agent.replay_capacity", lambda v: v >= 1, "an integer >= 1"),
     ("intrinsic.terms.novelty.action_scale", lambda v: v >= 0, "a number >= 0"),
     ("intrinsic.alpha", lambda v: 0 <= v <= 1, "a weight in [0, 1]"),
     ("intrinsic.terms.pe.eps", lambda v: v > 0, "a number > 0"),
     ("intrinsic.terms.pe.dropout_samples", lambda v: v >= 1, "an integer >= 1"),
     ("intrinsic.terms.novelty.memory_size", lambda v: v >= 1, "an integer >= 1"),
     ("intrinsic.terms.novelty.refresh_every", lambda v: v >= 1, "an integer >= 1"),
-    ("q_coef", lambda v: v >= 0, "a number >= 0"),
-    ("q_target_every", lambda v: v >= 1, "an integer >= 1"),
+    ("agent.q_coef", lambda v: v >= 0, "a number >= 0"),
+    ("agent.q_target_every", lambda v: v >= 1, "an integer >= 1"),
     ("env.frame_size", lambda v: v >= 8, "an integer >= 8"),
     ("env.frame_stack", lambda v: v >= 1, "an integer >= 1"),
     ("env.state_dim", lambda v: v >= 1, "an integer >= 1"),
@@ -75,9 +75,9 @@ RULES: list[Rule] = [
     ("planner.eta", lambda v: v >= 0, "a number >= 0"),
     ("planner.max_candidates", lambda v: v >= 1, "an integer >= 1"),
     ("planner.commit", lambda v: v >= 1, "an integer >= 1 (1: plan at every step)"),
-    ("transition_ensemble", lambda v: v >= 1, "an integer >= 1 (1: one transition model)"),
+    ("agent.transition_ensemble", lambda v: v >= 1, "an integer >= 1 (1: one transition model)"),
     ("intrinsic.terms.novelty.refresh_drift", lambda v: v >= 0, "a number >= 0 (0: refresh on the schedule only)"),
-    ("probe_every", lambda v: v >= 0, "an integer >= 0 (0: no model probe)"),
+    ("agent.probe_every", lambda v: v >= 0, "an integer >= 0 (0: no model probe)"),
     ("encoder.hidden", lambda v: all(w >= 1 for w in v), "a list of layer widths >= 1"),
     ("baseline.epsilon", lambda v: 0 <= v <= 1, "an exploration probability in [0, 1]"),
     ("baseline.gamma", lambda v: 0 <= v <= 1, "a discount in [0, 1]"),
@@ -110,8 +110,9 @@ def _cross_field_errors(cfg: DictConfig) -> list[str]:
     if k is not None and k >= cfg.budget.warmup_steps:
         errors.append(f"estimator.k={k}: must be < budget.warmup_steps={cfg.budget.warmup_steps} (the first memory)")
     imagined = OmegaConf.select(cfg, "intrinsic.terms.pe.imagined", default=None)
-    if imagined is not None and choice(imagined) == "ensemble" and cfg.transition_ensemble < 2:
-        errors.append(f"intrinsic.terms.pe.imagined=ensemble: needs transition_ensemble >= 2, got {cfg.transition_ensemble}")
+    ensemble = cfg.agent.transition_ensemble
+    if imagined is not None and choice(imagined) == "ensemble" and ensemble < 2:
+        errors.append(f"intrinsic.terms.pe.imagined=ensemble: needs agent.transition_ensemble >= 2, got {ensemble}")
     from curiosity.runtime.device import device_error, resolve_device  # imports torch: only once the config is read
 
     device = choice(cfg.device) if "device" in cfg else "cpu"
@@ -121,8 +122,9 @@ def _cross_field_errors(cfg: DictConfig) -> list[str]:
     elif resolve_device(device).type != "cpu" and cfg.baseline.name in CPU_ONLY_BASELINES:
         errors.append(f"device={device}: baseline={cfg.baseline.name} runs on the CPU only (its intrinsic-reward "
                       "networks do not move to a device yet); allowed: device=cpu")  # fmt: skip
-    if cfg.budget.warmup_steps < cfg.n_step:
-        errors.append(f"budget.warmup_steps={cfg.budget.warmup_steps}: must be >= n_step={cfg.n_step} (segments to sample)")
+    if cfg.budget.warmup_steps < cfg.agent.n_step:
+        errors.append(f"budget.warmup_steps={cfg.budget.warmup_steps}: must be >= agent.n_step={cfg.agent.n_step} "
+                      "(segments to sample)")  # fmt: skip
     if cfg.budget.max_steps <= cfg.budget.warmup_steps:
         errors.append(
             f"budget.max_steps={cfg.budget.max_steps}: must be > budget.warmup_steps={cfg.budget.warmup_steps}"

@@ -5,7 +5,7 @@ the real transitions seen (after the warm-up). An imagined edge has no true succ
 planner scores it, and ``imagined`` chooses the model's own estimate ê(s, a) of that error, normalised by the running
 mean of ê at the real pairs visited:
     ``dropout``: MC-dropout disagreement mean_m ‖T_m(s, a) − T(s, a)‖² (random: a fresh draw at every evaluation);
-    ``ensemble``: disagreement of a deep ensemble of transitions (``transition_ensemble`` ≥ 2; deterministic);
+    ``ensemble``: disagreement of a deep ensemble of transitions (``agent.transition_ensemble`` ≥ 2; deterministic);
     ``off``: imagined edges get no prediction-error term (a mixture gives its weight to the terms that imagine).
 Both running means are updated after use, once per env step (:meth:`PredictionError.observe`).
 """

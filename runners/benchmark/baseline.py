@@ -26,7 +26,8 @@ from curiosity.envs import make_env
 batch, repeats, threads = (int(v) for v in sys.argv[1:4])
 torch.set_num_threads(threads)
 torch.manual_seed(0)
-cfg = compose_config(["env.renderer=fast", f"batch_size={batch}"])
+key = "agent.batch_size" if "agent" in compose_config([]) else "batch_size"  # the key's place in this tree
+cfg = compose_config(["env.renderer=fast", f"{key}={batch}"])
 env = make_env(cfg.env, 1000)
 agent = build(cfg.baseline, cfg=cfg)
 obs, _ = env.reset(seed=0)

@@ -71,7 +71,7 @@ def train_iter_ms(batches: Sequence[int], repeats: int) -> dict[int, float]:
     """Median ms of one training iteration of the default agent at each batch size (replay of 500 random steps)."""
     out = {}
     for batch in batches:
-        agent, *_ = filled_agent([f"batch_size={batch}"], 500)
+        agent, *_ = filled_agent([f"agent.batch_size={batch}"], 500)
         out[batch] = timed(agent._iteration, repeats)
     return out
 
