@@ -64,7 +64,8 @@ def random_batch(batch_size: int, obs_shape: tuple[int, ...], seed: int, n_actio
 
 
 def group_options() -> list[tuple[str, str]]:
-    """Every (group, option) pair under ``conf/`` (hydra/ excluded)."""
+    """Every (group, option) pair under ``conf/`` (hydra/ excluded; experiment/ and sweep/, appended with ``+``, are
+    tested in test_sweeps.py)."""
     return sorted(
-        (p.parent.name, p.stem) for p in CONF.glob("*/*.yaml") if p.parent.name not in {"hydra", "experiment"}
+        (p.parent.name, p.stem) for p in CONF.glob("*/*.yaml") if p.parent.name not in {"hydra", "experiment", "sweep"}
     )

@@ -88,6 +88,7 @@ OTHER = {
     "++foo=1": Case(("++foo=1",), "foo"),
     "foo=1": Case(("foo=1",), "foo"),
     "batch_size=16 (moved)": Case(("batch_size=16",), "moved to agent.batch_size"),
+    "+sweep=fig7 without -m": Case(("+sweep=fig7",), "+sweep=fig7"),
     "+encoder.foo=1": Case(("+encoder.foo=1",), "encoder.foo"),
     "~seed": Case(("~seed",), "seed"),
     "estimator=kdee": Case(("estimator=kdee",), "estimator"),

@@ -92,6 +92,10 @@ def checked_config(overrides: Sequence[str]) -> tuple[DictConfig, DictConfig]:
 
 def _check_run(overrides: list[str]) -> None:
     cfg, task = checked_config(overrides)
+    if OmegaConf.select(cfg, "hydra.sweeper.params"):  # a sweep preset (+sweep=...) without -m: Hydra would run one job
+        preset = next((o for o in overrides if o.lstrip("+").startswith("sweep=")), "hydra.sweeper.params")
+        raise ConfigError([f"{preset}: a sweep preset lists jobs, which only -m runs (without it Hydra would run one "
+                           f"job with the defaults); allowed: python -m runners.train -m {' '.join(overrides)}"])  # fmt: skip
     check_run_dir(task, _directory(cfg, "hydra.run.dir"))
 
 
