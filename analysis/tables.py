@@ -36,7 +36,7 @@ NOTE = ("Steps-to-goal, lower is better. mean ± SE: censored runs (goal not rea
 
 
 def paper_numbers(path: Path = PAPER_NUMBERS) -> list[dict]:
-    """The published rows: env, method, mean, se, seeds, source, rows (a glob over our row labels)."""
+    """The published rows: env, method, mean, se, seeds, source, rows (a glob, or a list of globs, over our row labels)."""
     return list(yaml.safe_load(path.read_text()))
 
 
@@ -46,7 +46,11 @@ def _per_seed(g: pd.DataFrame) -> str:
 
 def _paper(env: str, labels: Sequence[str], numbers: Sequence[dict]) -> dict[str, object]:
     """The published row of ``env`` whose glob matches one of ``labels`` (a row's label and, pooled, its variants')."""
-    match = next((p for p in numbers if p["env"] == env and any(fnmatch.fnmatchcase(x, p["rows"]) for x in labels)), None)
+    def matches(p: dict) -> bool:
+        globs = p["rows"] if isinstance(p["rows"], list) else [p["rows"]]
+        return p["env"] == env and any(fnmatch.fnmatchcase(x, g) for x in labels for g in globs)
+
+    match = next((p for p in numbers if matches(p)), None)
     if match is None:
         return {"paper_method": "", "paper_mean": math.nan, "paper_se": math.nan, "paper_seeds": math.nan, "paper_source": ""}
     return {"paper_method": match["method"], "paper_mean": float(match["mean"]), "paper_se": float(match["se"]),

@@ -155,13 +155,17 @@ class ReplayBuffer:
         """
         if self._size == 0:
             raise ValueError("cannot sample from an empty buffer")
-        frame, act, rew, term = self._gather(generator.integers(0, self._size, size=batch_size))
+        return self._transitions(generator.integers(0, self._size, size=batch_size))
+
+    def _transitions(self, logical: np.ndarray, index: torch.Tensor | None = None) -> TransitionBatch:
+        frame, act, rew, term = self._gather(logical)
         return TransitionBatch(
             obs=self._decode(self._frames[frame]),
             act=torch.from_numpy(act),
             next_obs=self._decode(self._frames[(frame + 1) % self.frame_capacity]),
             rewards=torch.from_numpy(rew),
             terminateds=torch.from_numpy(term.astype(np.float32)),
+            index=index,
         )
 
     def _breaks(self, logical: np.ndarray) -> np.ndarray:
@@ -218,6 +222,7 @@ class ReplayBuffer:
             act=torch.from_numpy(act),
             rewards=torch.from_numpy(rew),
             terminateds=torch.from_numpy(term.astype(np.float32)),
+            index=torch.from_numpy(starts.astype(np.int64) + (self.total_added - self._size)),
         )
 
     def all_obs(self, start: int = 0, stop: int | None = None) -> torch.Tensor:
@@ -237,6 +242,18 @@ class ReplayBuffer:
                 f"{self.total_added - self._size}..{self.total_added - 1}); raise agent.replay_capacity"
             )
         return logical
+
+    def transitions_at(self, index: np.ndarray) -> TransitionBatch:
+        """Stored transitions by global index: (M,) -> a :class:`TransitionBatch` of M, carrying ``index``."""
+        return self._transitions(self._logical_of_global(index), torch.as_tensor(np.asarray(index, dtype=np.int64)))
+
+    def follows(self) -> np.ndarray:
+        """(M,) bool, oldest first: True where a stored transition's o_{t+1} is the next stored transition's o_t (the
+        same stored observation; False at an episode boundary and for the newest transition)."""
+        out = np.zeros(self._size, dtype=np.bool_)
+        if self._size > 1:
+            out[:-1] = ~self._start[self._phys(np.arange(1, self._size))]
+        return out
 
     def obs_at(self, index: np.ndarray) -> torch.Tensor:
         """o_t of transitions by global index (0 = the first transition ever added): (M,) -> (M, *obs_shape)."""

@@ -56,12 +56,14 @@ class SegmentBatch:
         act: (B, n) long actions a_t .. a_{t+n-1}.
         rewards: (B, n) float rewards r_t .. r_{t+n-1}.
         terminateds: (B, n) float in {0, 1}; d_{t+i} = 1 where o_{t+i+1} is terminal.
+        index: (B,) long global replay index of each segment's first transition, or None.
     """
 
     obs: Tensor
     act: Tensor
     rewards: Tensor
     terminateds: Tensor
+    index: Tensor | None = None
 
     def __len__(self) -> int:
         return int(self.act.shape[0])
@@ -72,9 +74,10 @@ class SegmentBatch:
         return int(self.act.shape[1])
 
     def to(self, device: torch.device | str) -> SegmentBatch:
-        """The same segments on ``device`` (no copy when already there)."""
-        return SegmentBatch(*(t.to(device) for t in (self.obs, self.act, self.rewards, self.terminateds)))
+        """The same segments on ``device`` (no copy when already there; indices stay on the host)."""
+        return SegmentBatch(*(t.to(device) for t in (self.obs, self.act, self.rewards, self.terminateds)), index=self.index)
 
     def first_step(self) -> TransitionBatch:
         """The first transition of every segment as a :class:`TransitionBatch`."""
-        return TransitionBatch(self.obs[:, 0], self.act[:, 0], self.obs[:, 1], self.rewards[:, 0], self.terminateds[:, 0])
+        return TransitionBatch(self.obs[:, 0], self.act[:, 0], self.obs[:, 1], self.rewards[:, 0], self.terminateds[:, 0],
+                               index=self.index)  # fmt: skip

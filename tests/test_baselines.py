@@ -46,8 +46,9 @@ def test_nsrs_is_a_preset_of_its_own_parts() -> None:
     assert agent.novelty is not None
     assert isinstance(agent.novelty.estimator, NSRSKNNNovelty) and agent.novelty.estimator.k == 5
     assert isinstance(agent.regulariser, GaussianPotentialRegulariser) and agent.regulariser.t == 2.0
-    assert isinstance(agent.optimizer, torch.optim.RMSprop)
-    assert agent.optimizer.defaults["lr"] == 2.5e-4 and agent.optimizer.defaults["alpha"] == 0.9
+    assert set(agent.optimizers) == {"encoder", "model", "q"} and agent.relabelled is not None  # NSRS's code's steps
+    for opt in agent.optimizers.values():
+        assert isinstance(opt, torch.optim.RMSprop) and opt.defaults["lr"] == 2.5e-4 and opt.defaults["alpha"] == 0.9
     assert agent.novelty.input == "state" and list(agent.intrinsic.terms) == ["novelty"] and agent.q is not None
     assert agent.model.reward_model is None and agent.cfg.agent.n_step == 1 and agent.cfg.agent.batch_size == 64
     assert not agent.novelty.standardise and agent.cfg.agent.replay_capacity == 10_000

@@ -223,10 +223,11 @@ def test_agent_keys_of_runs_made_before_the_agent_node_are_read_from_their_old_p
     """A run saved with the agent's keys at the top level (``batch_size``, ``optimizer``, ... before the ``agent`` node)
     and its encoder's ``latent_dim: ${internal_dim}`` reads back with them under ``agent`` and the interpolation
     following the key, each value in one place only."""
-    from curiosity.config.compose import MOVED, saved_config
+    from curiosity.config.compose import AGENT_KEYS, MOVED, saved_config
 
     now = OmegaConf.to_container(compose_cfg(["seed=3"]), resolve=False)
-    agent = now.pop("agent")
+    agent = {key: now["agent"].pop(key) for key in AGENT_KEYS}  # the keys that were top-level then
+    del now["agent"]
     old = {**now, **agent, "batch_size": 16, "internal_dim": 6, "optimizer": {"_target_": "torch.optim.SGD", "lr": 0.1}}
     old["encoder"]["latent_dim"] = "${internal_dim}"
     (tmp_path / ".hydra").mkdir()

@@ -16,6 +16,7 @@ from omegaconf import DictConfig, OmegaConf
 
 from curiosity.agents.base import Agent
 from curiosity.agents.q_learning import QLearner
+from curiosity.agents.relabel import RelabelledRewards
 from curiosity.agents.representation import (
     LOSS_KEYS,
     LossWeights,
@@ -25,6 +26,7 @@ from curiosity.agents.representation import (
     total_loss,
 )
 from curiosity.agents.schedule import TrainSchedule
+from curiosity.agents.updates import Q_GRAD_CLAMP, build_optimizers, load_optimizers_state, optimizers_state, step
 from curiosity.agents.world_model import WorldModel
 from curiosity.config.build import build, choice
 from curiosity.envs.simulator import Simulator, SimStates
@@ -40,7 +42,7 @@ from curiosity.planning.protocols import Plan, Planner, PlanRequest
 from curiosity.planning.rollout import SimulatorRollout
 from curiosity.replay import ReplayBuffer
 from curiosity.runtime.device import resolve_device, to_device
-from curiosity.types import TransitionBatch
+from curiosity.types import SegmentBatch, TransitionBatch
 
 AGENT_KEYS = ("intrinsic/reward", "losses/q", "train/iterations", "planner/score", "planner/entropy",
               "planner/first_action_entropy", "planner/spread/score", "planner/spread/reward", "planner/noise",
@@ -94,8 +96,11 @@ class PaperAgent(Agent):
                   if self.planner.needs_q else None)  # fmt: skip
         if self.q is not None:
             self.q.to(self.device)
-        params = list(self.model.parameters()) + (list(self.q.q.parameters()) if self.q else [])
-        self.optimizer = build(own.optimizer, params=params)
+        self.updates = choice(own.updates)  # joint | nsrs (curiosity/agents/updates.py)
+        self.optimizers = build_optimizers(self.updates, own.optimizer, self.model, self.model.encoder,
+                                           self.q.q if self.q is not None else None)  # fmt: skip
+        relabel = self.q is not None and choice(own.q_intrinsic) == "relabel"
+        self.relabelled = RelabelledRewards() if relabel else None  # NSRS's stored r_int of Q targets
         self.replay = ReplayBuffer(own.replay_capacity, obs_shape_of(cfg.env), pixel_uint8=self.obs_pixels)
         context = IntrinsicContext(n_actions=self.n_actions, obs_shape=obs_shape_of(cfg.env), latent_dim=own.internal_dim,
                                    warmup_steps=cfg.budget.warmup_steps, seed=int(cfg.seed), device=self.device,
@@ -268,29 +273,61 @@ class PaperAgent(Agent):
             if self.schedule.early_stop_every and done % self.schedule.early_stop_every == 0:
                 window = []
         out = {k: v / done for k, v in sums.items()}
+        if self.relabelled is not None:  # NSRS: the buffer's intrinsic rewards as of this training call's end
+            self._relabel()
         out.update({"train/iterations": float(done), "timing/train_ms": 1e3 * (time.perf_counter() - start)})
         return out
 
+    def _relabel(self) -> None:
+        assert self.relabelled is not None
+        if self.novelty is not None:
+            self.novelty.refresh()  # NSRS's memory: every stored state under the encoder just trained
+        self.relabelled.relabel(self.replay, self._encode_eval, self.intrinsic, self.device)
+
+    def _td_loss(self, z0: torch.Tensor, z1: torch.Tensor, seg: SegmentBatch, first: TransitionBatch) -> torch.Tensor:
+        """The Q-tree agent's TD loss on the segments' first transitions, r_ext + r_int (scored now, or NSRS's stored)."""
+        assert self.q is not None
+        if self.relabelled is not None:
+            assert first.index is not None
+            r_int = self.relabelled.lookup(first.index).to(self.device)
+        else:
+            with torch.no_grad():
+                r_int = self.intrinsic.compute(first)
+        loss = self.q.loss(z0, first.act, first.rewards + r_int, z1, seg.obs[:, 1], first.terminateds)
+        check_finite("losses/q", loss)
+        return loss
+
     def _iteration(self) -> tuple[dict[str, float], float]:
-        """One gradient step on L = Σ_k w_k L_k: the representation terms, and the TD term of a Q-tree agent."""
+        """One gradient iteration (``agent.updates``): joint, one step on L = Σ_k w_k L_k, the representation terms and
+        the TD term of a Q-tree agent; nsrs, a representation step, then a Q step with the updated encoder."""
         seg = self.replay.sample_segments(self.cfg.agent.batch_size, self.cfg.agent.n_step, self.rng).to(self.device)
         enc = encode_segments(self.model, seg)
         terms, logs = representation_terms(self.model, seg, enc, self.regulariser, self.weights)
         first = seg.first_step().with_latents(enc.z[:, 0].detach(), enc.z[:, 1].detach())
         logs.update(self.intrinsic.update(first))  # rewards that learn (ICM, RND) take their step
-        if self.q is not None:
-            with torch.no_grad():
-                r_int = self.intrinsic.compute(first)
-            terms["q"] = self.q.loss(enc.z[:, 0], first.act, first.rewards + r_int, enc.z[:, 1], seg.obs[:, 1],
-                                     first.terminateds)  # fmt: skip
-            check_finite("losses/q", terms["q"])
-            logs["losses/q"] = terms["q"].item()
-        loss = total_loss(terms, self.weights.of_terms())
-        check_finite("losses/total", loss)
-        logs["losses/total"] = loss.item()
-        self.optimizer.zero_grad(set_to_none=True)
-        loss.backward()
-        self.optimizer.step()
+        weights = self.weights.of_terms()
+        if self.updates == "joint":
+            if self.q is not None:
+                terms["q"] = self._td_loss(enc.z[:, 0], enc.z[:, 1], seg, first)
+                logs["losses/q"] = terms["q"].item()
+            loss = total_loss(terms, weights)
+            check_finite("losses/total", loss)
+            step(self.optimizers.values(), loss)
+            total = loss.item()
+        else:
+            loss = total_loss(terms, weights)
+            check_finite("losses/total", loss)
+            step((self.optimizers["encoder"], self.optimizers["model"]), loss)
+            total = loss.item()
+            if self.q is not None:
+                z0 = self.model.encode(seg.obs[:, 0])
+                with torch.no_grad():
+                    z1 = self.model.encode(seg.obs[:, 1])
+                q_loss = weights["q"] * self._td_loss(z0, z1, seg, first)
+                step((self.optimizers["q"],), q_loss, clamp=Q_GRAD_CLAMP)
+                logs["losses/q"] = q_loss.item() / weights["q"] if weights["q"] else 0.0
+                total += q_loss.item()
+        logs["losses/total"] = total
         if self.q is not None:
             self.q.after_update()
         eval_error = 0.0
@@ -303,10 +340,11 @@ class PaperAgent(Agent):
     def state_dict(self) -> dict[str, Any]:
         return {
             "model": self.model.state_dict(), "q": self.q.state_dict() if self.q else None,
-            "optimizer": self.optimizer.state_dict(), "replay": self.replay.state_dict(),
+            **optimizers_state(self.optimizers), "replay": self.replay.state_dict(),
             "intrinsic": self.intrinsic.state_dict(), "schedule": self.schedule.state_dict(),
             "rng": self.rng.bit_generator.state, "generator": self.generator.get_state(), "totals": self.totals,
             "queue": list(self.queue),
+            **({"relabelled": self.relabelled.state_dict()} if self.relabelled is not None else {}),
         }  # fmt: skip
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
@@ -314,7 +352,9 @@ class PaperAgent(Agent):
         self.model.load_state_dict(state["model"])
         if self.q is not None:
             self.q.load_state_dict(state["q"])
-        self.optimizer.load_state_dict(state["optimizer"])
+        load_optimizers_state(self.optimizers, state)
+        if self.relabelled is not None:
+            self.relabelled.load_state_dict(state["relabelled"])
         self.replay.load_state_dict(state["replay"])
         saved = state["intrinsic"] if "intrinsic" in state else legacy_intrinsic_state(state["curiosity"])
         self.intrinsic.load_state_dict(to_device({k: v for k, v in saved.items() if k in self.intrinsic.terms}, self.device))

@@ -105,6 +105,8 @@ LEGACY: dict[str, Any] = {
     "planner.temperature_scale": "absolute",
     "planner.sample_candidates": False,
     "planner.commit": 1,
+    "agent.updates": "joint",
+    "agent.q_intrinsic": "batch",
 }
 
 

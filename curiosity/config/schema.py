@@ -68,6 +68,16 @@ class Average(Enum):
     ema = "ema"
 
 
+class UpdateRule(Enum):
+    joint = "joint"
+    nsrs = "nsrs"
+
+
+class QIntrinsic(Enum):
+    batch = "batch"
+    relabel = "relabel"
+
+
 class BandwidthRule(Enum):
     fixed = "fixed"
     median_nn = "median_nn"
@@ -356,6 +366,10 @@ class AgentKeysConfig:
     q_coef: float = 1.0
     q_target_every: int = 1000
     q_huber: bool = True
+    # how an iteration steps the parameters, and the intrinsic rewards of Q targets (curiosity/agents/updates.py,
+    # curiosity/agents/relabel.py): ours, or NSRS's code's
+    updates: UpdateRule = UpdateRule.joint  # joint: one optimiser, one step on L | nsrs: representation step, then Q step
+    q_intrinsic: QIntrinsic = QIntrinsic.batch  # batch: score each sampled batch | relabel: the buffer, after training
 
 
 # ---------------------------------------------------------------- top level

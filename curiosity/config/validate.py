@@ -122,6 +122,14 @@ def _cross_field_errors(cfg: DictConfig) -> list[str]:
     elif resolve_device(device).type != "cpu" and cfg.baseline.name in CPU_ONLY_BASELINES:
         errors.append(f"device={device}: baseline={cfg.baseline.name} runs on the CPU only (its intrinsic-reward "
                       "networks do not move to a device yet); allowed: device=cpu")  # fmt: skip
+    if cfg.baseline._target_ != "curiosity.agents.paper.PaperAgent":  # the Q agent (ICM, RND) and random
+        for key, ours in (("updates", "joint"), ("q_intrinsic", "batch")):
+            if choice(cfg.agent[key]) != ours:
+                errors.append(f"agent.{key}={choice(cfg.agent[key])}: only the paper's agent and NSRS read it, not "
+                              f"baseline={cfg.baseline.name}; allowed: agent.{key}={ours}")  # fmt: skip
+    elif choice(cfg.agent.q_intrinsic) == "relabel" and cfg.planner.name != "qtree":
+        errors.append(f"agent.q_intrinsic=relabel: rescored rewards feed Q targets, and planner={cfg.planner.name} has no "
+                      "Q; allowed: agent.q_intrinsic=batch, or planner=qtree")  # fmt: skip
     if cfg.budget.warmup_steps < cfg.agent.n_step:
         errors.append(f"budget.warmup_steps={cfg.budget.warmup_steps}: must be >= agent.n_step={cfg.agent.n_step} "
                       "(segments to sample)")  # fmt: skip

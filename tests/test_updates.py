@@ -1,0 +1,94 @@
+"""NSRS's training as its code runs it (``agent.updates=nsrs``, ``agent.q_intrinsic=relabel``), against our default
+(``joint``, ``batch``): which parameters each step moves, the relabelled rewards, and the refusals."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from curiosity.agents.relabel import RelabelledRewards
+from curiosity.agents.updates import build_optimizers, step
+from curiosity.config import build, validate
+from curiosity.config.validate import ConfigError
+from tests.conftest import compose_cfg
+
+STATE = ["env.obs=state", "encoder=mlp", "budget=smoke", "budget.warmup_steps=12", "agent.batch_size=8"]
+
+
+def _filled(overrides: list[str], steps: int = 40):
+    """The paper's agent (``overrides``) with ``steps`` random transitions of Acrobot's state in its replay."""
+    from curiosity.envs import make_env
+
+    cfg = compose_cfg([*STATE, *overrides])
+    env = make_env(cfg.env, 1000)
+    agent = build(cfg.baseline, cfg=cfg)
+    obs, _ = env.reset(seed=0)
+    rng = np.random.default_rng(0)
+    for t in range(steps):
+        a = int(rng.integers(3))
+        nxt, r, term, _, _ = env.step(a)
+        agent.observe(obs, a, r, nxt, term, t)
+        obs = nxt
+    return agent
+
+
+def test_nsrs_rule_steps_the_encoder_twice_in_the_representation_step_and_again_in_the_q_step() -> None:
+    torch.manual_seed(0)
+    enc, model, q = torch.nn.Linear(2, 2), torch.nn.Sequential(), torch.nn.Linear(2, 1)
+    model.add_module("encoder", enc)
+    model.add_module("transition", torch.nn.Linear(2, 2))
+    opts = build_optimizers("nsrs", {"_target_": "torch.optim.SGD", "lr": 0.1}, model, enc, q)
+    assert set(opts) == {"encoder", "model", "q"}
+    before, transition = enc.weight.detach().clone(), model.transition.weight.detach().clone()
+    loss = enc(torch.ones(1, 2)).sum()
+    step((opts["encoder"], opts["model"]), loss)
+    # SGD: two steps of the same gradient (ones): the encoder moves 2 x lr, the transition model not at all
+    assert torch.allclose(enc.weight, before - 0.2, atol=1e-6) and torch.equal(model.transition.weight, transition)
+    q_before = q.weight.detach().clone()
+    step((opts["q"],), 100.0 * q(enc(torch.ones(1, 2))).sum(), clamp=1.0)
+    assert float((q.weight.detach() - q_before).abs().max()) <= 0.1 + 1e-6  # the clamped gradient: at most lr x 1 per entry
+    joint = build_optimizers("joint", {"_target_": "torch.optim.SGD", "lr": 0.1}, model, enc, q)
+    assert set(joint) == {"all"} and len(joint["all"].param_groups[0]["params"]) == 6
+
+
+def test_relabelled_rewards_are_the_intrinsic_reward_of_every_stored_transition_after_training(one_thread) -> None:
+    agent = _filled(["baseline=nsrs"])
+    rel = agent.relabelled
+    assert rel is not None and len(rel.values) == len(agent.replay)  # relabelled after the last training call
+    first = agent.replay.total_added - len(agent.replay)
+    index = np.arange(first, agent.replay.total_added)
+    batch = agent.replay.transitions_at(index)
+    with torch.no_grad():
+        direct = agent.intrinsic.compute(batch.with_latents(agent._encode_eval(batch.obs), agent._encode_eval(batch.next_obs)))
+    assert torch.allclose(rel.values, direct.float(), rtol=1e-4, atol=1e-5)  # reused latents = recomputed ones
+    newer = torch.tensor([agent.replay.total_added, agent.replay.total_added + 5])
+    assert rel.lookup(newer).tolist() == [0.0, 0.0]  # added since: 0 until the next relabel (NSRS)
+    again = RelabelledRewards()
+    again.load_state_dict(rel.state_dict())
+    assert torch.equal(again.lookup(torch.from_numpy(index)), rel.values)  # exact: a copy of the same tensor
+
+
+@pytest.mark.parametrize("overrides", [["baseline=nsrs"], ["+experiment=paper_code"],
+                                       ["baseline=nsrs", "agent.updates=joint", "agent.q_intrinsic=batch"],
+                                       ["agent.updates=nsrs"]])  # fmt: skip
+def test_both_rules_train_and_resume_from_a_checkpoint(overrides: list[str], one_thread) -> None:
+    agent = _filled(overrides, steps=20)
+    state = agent.state_dict()
+    assert ("optimizers" in state) == (agent.updates == "nsrs")
+    other = build(agent.cfg.baseline, cfg=agent.cfg)
+    other.load_state_dict(state)
+    names = sorted(agent.optimizers)
+    assert sorted(other.optimizers) == names
+    for name in names:
+        assert other.optimizers[name].state_dict()["state"].keys() == agent.optimizers[name].state_dict()["state"].keys()
+
+
+@pytest.mark.parametrize(("overrides", "key"), [
+    (["agent.q_intrinsic=relabel"], "agent.q_intrinsic=relabel"),  # MPC has no Q
+    (["baseline=icm", "agent.updates=nsrs"], "agent.updates=nsrs"),
+    (["baseline=rnd", "agent.q_intrinsic=relabel"], "agent.q_intrinsic=relabel"),
+])  # fmt: skip
+def test_options_an_agent_does_not_read_are_refused(overrides: list[str], key: str) -> None:
+    with pytest.raises(ConfigError, match=key.replace(".", r"\.")):
+        validate(compose_cfg(overrides))
