@@ -105,6 +105,21 @@ def test_a_run_directory_of_another_config_is_refused(tmp_path: Path) -> None:
     assert again.env_steps == 50  # the same run, complete: returned as it is
 
 
+def test_a_run_made_before_a_key_existed_resumes_when_the_key_keeps_what_it_did(tmp_path: Path) -> None:
+    """A checkpoint whose config lacks a key added since (here ``agent.updates``) resumes when the key has the value
+    that reproduces the old run (``LEGACY``: ``joint``), and is refused under another value."""
+    import torch
+
+    cfg = compose_cfg([*ARGS, "budget.max_steps=50"])
+    run(cfg, tmp_path)
+    ckpt = torch.load(tmp_path / "checkpoint.pt", weights_only=False)
+    del ckpt["config"]["agent"]["updates"]
+    save_checkpoint(tmp_path, ckpt)  # a finished run: its config is checked before it is returned as complete
+    with pytest.raises(RunDirectoryError, match=r"agent\.updates: None there, 'nsrs' now"):
+        run(compose_cfg([*ARGS, "budget.max_steps=50", "agent.updates=nsrs"]), tmp_path)
+    assert run(cfg, tmp_path).env_steps == 50
+
+
 def test_a_directory_with_a_run_but_no_checkpoint_is_not_overwritten(tmp_path: Path) -> None:
     (tmp_path / "metrics.csv").write_text("step\n1\n")
     with pytest.raises(RunDirectoryError, match="without a checkpoint"):

@@ -17,6 +17,7 @@ from tqdm import tqdm
 
 from curiosity.agents.base import Agent
 from curiosity.config import ConfigError, build, sampled_candidates, validate
+from curiosity.config.compose import LEGACY
 from curiosity.envs import GridCoverage, make_env
 from curiosity.envs.adapter import adapter_of
 from curiosity.envs.state import env_state, restore_env
@@ -61,14 +62,21 @@ def identity(cfg: DictConfig) -> dict[str, Any]:
     return {k: v for k, v in container.items() if k not in VOLATILE_KEYS}
 
 
+_MISSING = object()
+
+
 def _differences(saved: dict[str, Any], now: dict[str, Any], prefix: str = "") -> list[str]:
+    """``key: <saved> there, <now> now`` for every key whose values differ. A key the checkpoint's run did not have
+    yet, set now to the value that reproduces what such a run did (``LEGACY``), is no difference: that run resumes."""
     out = []
     for key in sorted(set(saved) | set(now)):
-        a, b = saved.get(key), now.get(key)
+        a, b = saved.get(key, _MISSING), now.get(key, _MISSING)
         if isinstance(a, dict) and isinstance(b, dict):
             out += _differences(a, b, f"{prefix}{key}.")
+        elif a is _MISSING and f"{prefix}{key}" in LEGACY and str(b) == str(LEGACY[f"{prefix}{key}"]):
+            continue
         elif a != b:
-            out.append(f"{prefix}{key}: {a!r} there, {b!r} now")
+            out.append(f"{prefix}{key}: {None if a is _MISSING else a!r} there, {None if b is _MISSING else b!r} now")
     return out
 
 
