@@ -1,5 +1,7 @@
 """The command line every analysis command shares: ``RUNS_DIR [--out DIR] [--group-by KEYS] [--pool LABEL=GLOB]``,
-and one clear error line (no traceback) for a missing directory, no runs or a malformed option."""
+and one clear error line (no traceback) for a missing directory, no runs or a malformed option. A results directory
+may hold ``analysis.yaml`` with the ``pool``, ``group_by`` and ``reference`` its tables were made with: the bare
+command then makes them again (an option on the command line wins)."""
 
 from __future__ import annotations
 
@@ -9,7 +11,12 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+import yaml
+
 from analysis.collect import existing_roots
+
+SETTINGS = "analysis.yaml"  # in RUNS_DIR: how its tables are made (pool, group_by, reference), so the bare command does
+SETTING_KEYS = ("pool", "group_by", "reference")
 
 
 @dataclass
@@ -31,8 +38,32 @@ def parser(description: str) -> argparse.ArgumentParser:
     p.add_argument("--group-by", default="", help="comma-separated config keys that define a row, e.g. "
                    "env.name,entropy.name (default: method label + the keys that differ between its runs)")  # fmt: skip
     p.add_argument("--pool", action="append", default=[], metavar="LABEL=GLOB",
-                   help="merge the rows whose label matches GLOB into one row LABEL (repeatable)")  # fmt: skip
+                   help="merge the rows whose label matches GLOB into one row LABEL (repeatable); LABEL+=GLOB adds "
+                        "the pooled row beside the rows it pools")  # fmt: skip
     return p
+
+
+def settings(root: Path) -> dict[str, object]:
+    """``RUNS_DIR/analysis.yaml``: the defaults of ``--pool`` (a list), ``--group-by`` (a list) and ``--reference`` that
+    the directory's committed tables were made with; {} without the file."""
+    path = root / SETTINGS
+    if not path.is_file():
+        return {}
+    found = yaml.safe_load(path.read_text()) or {}
+    if not isinstance(found, dict) or set(found) - set(SETTING_KEYS):
+        extra = sorted(set(found) - set(SETTING_KEYS)) if isinstance(found, dict) else found
+        raise ValueError(f"{path}: {extra} is not a setting; allowed: {', '.join(SETTING_KEYS)}")
+    return found
+
+
+def _apply(args: argparse.Namespace, found: dict[str, object]) -> None:
+    """Settings from the directory's file where the command line left an option at its default."""
+    if not args.pool and "pool" in found:
+        args.pool = [str(v) for v in found["pool"]]  # type: ignore[union-attr]
+    if not args.group_by and "group_by" in found:
+        args.group_by = ",".join(str(v) for v in found["group_by"])  # type: ignore[union-attr]
+    if hasattr(args, "reference") and args.reference is None and "reference" in found:
+        args.reference = str(found["reference"])
 
 
 def run(p: argparse.ArgumentParser, command: Callable[[Options], str]) -> None:
@@ -41,6 +72,7 @@ def run(p: argparse.ArgumentParser, command: Callable[[Options], str]) -> None:
     root = existing_roots([args.root])[0]
     out = Path(args.out) if args.out else root / "report"
     try:
+        _apply(args, settings(root))
         print(command(Options(root, out, [k for k in args.group_by.split(",") if k], list(args.pool), args)))
     except (FileNotFoundError, ValueError) as e:
         print(f"error: {e}", file=sys.stderr)

@@ -29,13 +29,13 @@ def _command(o: Options) -> str:
     args = [str(o.root)]
     args += [f"--group-by {','.join(o.group_by)}"] if o.group_by else []
     args += [f"--pool {shlex.quote(p)}" for p in o.pools]
-    args += [f"--reference {shlex.quote(o.args.reference)}"] if o.args.reference != DEFAULT_REFERENCE else []
+    args += [f"--reference {shlex.quote(o.args.reference)}"] if o.args.reference not in (None, DEFAULT_REFERENCE) else []
     return "python -m analysis.report " + " ".join(args)
 
 
 def write_report(o: Options) -> str:
     """Write the tables, the figures and ``README.md`` embedding them; returns the one-line result."""
-    write_tables(o.root, o.out, o.args.reference, o.group_by, o.pools)
+    write_tables(o.root, o.out, o.args.reference or DEFAULT_REFERENCE, o.group_by, o.pools)
     write_figures(o.root, o.out, o.group_by, o.pools)
     parts = [f"# Report: `{o.root}`", "",
              f"Written by `{_command(o)}` from the run directories' `summary.json`, `.hydra/config.yaml` and "
@@ -53,7 +53,8 @@ def write_report(o: Options) -> str:
 
 def main() -> None:
     p = parser(__doc__.splitlines()[0])
-    p.add_argument("--reference", default=DEFAULT_REFERENCE, help="glob over row labels: the Welch test's reference row")
+    p.add_argument("--reference", default=None,
+                   help=f"glob over row labels: the Welch test's reference row (default {DEFAULT_REFERENCE})")  # fmt: skip
     run(p, write_report)
 
 

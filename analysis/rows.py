@@ -91,13 +91,21 @@ def label_rows(runs: pd.DataFrame, group_by: Sequence[str] = ()) -> pd.DataFrame
 
 
 def pool_rows(runs: pd.DataFrame, pools: Sequence[str]) -> pd.DataFrame:
-    """Merge rows: each ``LABEL=PATTERN`` renames every row matching the glob ``PATTERN`` to ``LABEL`` (per env), and
-    keeps the row it came from in ``stratum`` (the bootstrap resamples seeds within each stratum)."""
+    """Merge rows: each ``LABEL=PATTERN`` renames every row matching the glob ``PATTERN`` to ``LABEL`` (per env);
+    ``LABEL+=PATTERN`` adds the pooled row ``LABEL`` and keeps the rows it pools. ``stratum`` keeps the row each run
+    came from (the bootstrap resamples seeds within each stratum)."""
     runs = runs.copy()
     runs["stratum"] = runs["row"]
+    added = []
     for pool in pools:
         label, sep, pattern = pool.partition("=")
+        keep = label.endswith("+")
+        label = label.removesuffix("+")
         if not sep or not label or not pattern:
-            raise ValueError(f"--pool {pool}: expected LABEL=PATTERN (a glob over row labels)")
-        runs.loc[[fnmatch.fnmatchcase(r, pattern) for r in runs["row"]], "row"] = label
-    return runs
+            raise ValueError(f"--pool {pool}: expected LABEL=PATTERN or LABEL+=PATTERN (a glob over row labels)")
+        match = [fnmatch.fnmatchcase(r, pattern) for r in runs["row"]]
+        if keep:
+            added.append(runs.loc[match].assign(row=label))
+        else:
+            runs.loc[match, "row"] = label
+    return pd.concat([runs, *added], ignore_index=True) if added else runs

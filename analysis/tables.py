@@ -154,10 +154,11 @@ def write_tables(root: Path, out: Path, reference: str = DEFAULT_REFERENCE, grou
 
 def main() -> None:
     p = parser(__doc__.splitlines()[0])
-    p.add_argument("--reference", default=DEFAULT_REFERENCE, help="glob over row labels: the Welch test's reference row")
+    p.add_argument("--reference", default=None,
+                   help=f"glob over row labels: the Welch test's reference row (default {DEFAULT_REFERENCE})")  # fmt: skip
 
     def command(o: Options) -> str:
-        table = write_tables(o.root, o.out, o.args.reference, o.group_by, o.pools)
+        table = write_tables(o.root, o.out, o.args.reference or DEFAULT_REFERENCE, o.group_by, o.pools)
         return f"{len(table)} row(s) written to {o.out}/steps_to_goal.{{md,tex,csv}}"
 
     run(p, command)

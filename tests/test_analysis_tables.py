@@ -113,3 +113,27 @@ def test_a_run_without_a_hydra_config_is_read_from_its_summary(tmp_path) -> None
     shutil.rmtree(d / ".hydra")
     (row,) = load_summaries(tmp_path).to_dict("records")
     assert row["steps_to_goal"] == 640 and row["method"] == "nsrs" and "entropy" not in row
+
+
+def test_a_pool_with_plus_adds_the_pooled_row_beside_its_parts(root) -> None:
+    runs = pool_rows(label_rows(load_runs(root)), [POOL.replace("=", "+=", 1)])
+    table = steps_table(runs, numbers=paper_numbers()).set_index(["env", "row"])
+    for row in (RENYI, RENYI_MI, "ours (Rényi, pooled)"):
+        assert ("mountaincar", row) in table.index
+    pooled = table.loc[("mountaincar", "ours (Rényi, pooled)")]
+    parts = table.loc[[("mountaincar", RENYI), ("mountaincar", RENYI_MI)]]
+    assert pooled.seeds == parts.seeds.sum() == 5 and pooled.paper_mean == 1456.9
+
+
+def test_a_directory_s_analysis_yaml_makes_its_tables_with_the_bare_command(tmp_path, root) -> None:
+    runs = tmp_path / "runs"
+    shutil.copytree(root, runs)
+    (runs / "analysis.yaml").write_text(f"pool: ['{POOL.replace('=', '+=', 1)}']\nreference: random\n")
+    assert analysis("tables", runs).returncode == 0
+    text = (runs / "report" / "steps_to_goal.md").read_text()
+    assert "ours (Rényi, pooled)" in text and RENYI in text and "`random`" in text  # pooled beside parts; the reference
+    assert analysis("tables", runs, "--reference", "nsrs*").returncode == 0  # the command line wins
+    assert "`nsrs*`" in (runs / "report" / "steps_to_goal.md").read_text()
+    (runs / "analysis.yaml").write_text("pools: []\n")
+    bad = analysis("tables", runs)
+    assert bad.returncode == 1 and bad.stderr.count("\n") == 1 and "allowed: pool, group_by, reference" in bad.stderr
