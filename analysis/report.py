@@ -43,8 +43,11 @@ def write_report(o: Options) -> str:
              "[LaTeX](steps_to_goal.tex) and [CSV](steps_to_goal.csv); runs not finished in "
              "[incomplete.csv](incomplete.csv).", "",
              "## Steps to goal", "", (o.out / "steps_to_goal.md").read_text().rstrip(), "",
-             "## Stable intrinsic reward", "", (o.out / "stability.md").read_text().rstrip(), "",
-             "## Figures", ""]  # fmt: skip
+             "## Stable intrinsic reward", "", (o.out / "stability.md").read_text().rstrip(), ""]  # fmt: skip
+    for name in ("spread", "stable_step"):  # the Figure 6 / Figure 7 tests, where runs log their columns
+        if (o.out / f"{name}.md").is_file():
+            parts += ["#" + (o.out / f"{name}.md").read_text().rstrip(), ""]
+    parts += ["## Figures", ""]
     for name in FIGURES:
         parts += [f"![{name}]({name}.png)", "", f"{CAPTIONS[name]} ([PDF]({name}.pdf))", ""]
     (o.out / "README.md").write_text("\n".join(parts))

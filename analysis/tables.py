@@ -20,6 +20,7 @@ from pathlib import Path
 import pandas as pd
 import yaml
 
+from analysis import claims
 from analysis.cli import Options, parser, run
 from analysis.collect import load_incomplete
 from analysis.rows import label_rows, load_runs, pool_rows
@@ -149,7 +150,24 @@ def write_tables(root: Path, out: Path, reference: str = DEFAULT_REFERENCE, grou
     table.to_csv(out / "steps_to_goal.csv", index=False, float_format="%.6g", lineterminator="\n")
     cols = ["env", "method", "seed", "status", "detail", "run_dir"]
     incomplete.reindex(columns=cols).to_csv(out / "incomplete.csv", index=False, lineterminator="\n")
+    if not runs.empty:
+        write_curve_tables(root, out, reference, group_by, pools)
     return table
+
+
+def write_curve_tables(root: Path, out: Path, reference: str, group_by: Sequence[str], pools: Sequence[str]) -> None:
+    """``spread.{md,csv}`` (Figure 6) and ``stable_step.{md,csv}`` (Figure 7) for the runs that log their columns."""
+    from analysis.figures import load  # the metrics of every run: only once the steps table is written
+
+    _, metrics = load(root, list(group_by), list(pools))
+    for name, table, title, note in (
+        ("spread", claims.spread_table(metrics, reference), "Spread of the next latents (Figure 6)", claims.SPREAD_NOTE),
+        ("stable_step", claims.stable_table(metrics, reference), "Stable intrinsic reward (Figure 7)", claims.STABLE_NOTE),
+    ):  # fmt: skip
+        if table.empty:
+            continue
+        (out / f"{name}.md").write_text(claims.to_markdown(table, title, note, reference))
+        table.to_csv(out / f"{name}.csv", index=False, float_format="%.6g", lineterminator="\n")
 
 
 def main() -> None:

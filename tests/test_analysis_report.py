@@ -33,5 +33,5 @@ def test_the_committed_report_tables_are_what_the_command_writes(tmp_path) -> No
     assert res.returncode == 0, res.stderr
     committed = REPO / "results" / "report"
     for name in ("steps_to_goal.md", "steps_to_goal.tex", "steps_to_goal.csv", "incomplete.csv", "stability.md",
-                 "stability.csv", "README.md"):  # fmt: skip
+                 "stability.csv", "spread.md", "spread.csv", "stable_step.md", "stable_step.csv", "README.md"):  # fmt: skip
         assert (tmp_path / name).read_bytes() == (committed / name).read_bytes(), name  # exact: text of the same numbers
