@@ -236,6 +236,10 @@ def test_planner_commit_executes_the_chosen_sequence_before_planning_again() -> 
             agent.load_state_dict(state)
             assert agent.queue == state["queue"]
     assert plans == 4 and executed == chosen  # 12 agent steps, 3 actions per plan, every planned action executed
+    agent.act(obs, 16)
+    assert len(agent.queue) == 2
+    agent.observe(obs, 0, -1.0, obs, True, 16)  # a termination that is not the goal: the loop resets the env
+    assert agent.queue == []  # the rest of the sequence was planned for the episode that ended
 
 
 def test_planner_commit_beyond_the_horizon_is_refused() -> None:

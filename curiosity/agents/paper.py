@@ -235,6 +235,8 @@ class PaperAgent(Agent):
         """Store the transition; log its intrinsic reward (each term's, and their mixture) once the reward is ready;
         fold it into the reward's memory and statistics (``observe``: refreshes the novelty memory when due); train."""
         self.replay.add(obs, action, reward, next_obs, terminated)
+        if terminated:
+            self.queue = []  # the chosen sequence's remaining actions belong to the episode that just ended
         z = torch.stack([self.encode_obs(obs), self.encode_obs(next_obs)])
         dev = self.device
         batch = TransitionBatch(torch.as_tensor(obs, device=dev).unsqueeze(0), torch.tensor([action], device=dev),

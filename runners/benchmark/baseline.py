@@ -60,7 +60,7 @@ def _iteration_ms(tree: Path, batch: int, repeats: int, threads: int) -> float:
 def speedup_vs(commit: str, batch: int, repeats: int, threads: int, rounds: int = 2) -> dict[str, float | str]:
     """ms per training iteration at ``batch`` here and at ``commit``, alternating ``rounds`` times; their ratio."""
     with tempfile.TemporaryDirectory() as tmp:
-        tree = Path(tmp) / "baseline"
+        tree = Path(tmp) / f"baseline-{os.getpid()}"  # git names the worktree after it: unique per process
         subprocess.run(["git", "worktree", "add", "--detach", str(tree), commit], cwd=REPO, check=True,
                        capture_output=True)  # fmt: skip
         try:
