@@ -67,3 +67,10 @@ def test_a_preset_runs_into_its_directory_and_resumes(tmp_path: Path) -> None:
     again = run_cli(args, cwd=tmp_path)
     assert again.returncode == 0 and again.stdout.count("already complete") == 2, again.stdout[-2000:]
     assert {p: p.read_bytes() for p in summaries} == before  # exact: the same files, untouched
+
+
+@pytest.mark.parametrize("launcher", ["joblib", "submitit_local", "submitit_slurm", "slurm"])
+def test_a_preset_composes_with_every_launcher(launcher: str) -> None:
+    cfg = compose_config(["+sweep=table1", f"hydra/launcher={launcher}"], hydra_node=True)
+    assert cfg.hydra.sweep.dir == "results/table1" and "Launcher" in cfg.hydra.launcher._target_
+    assert cfg.hydra.sweeper.params["+experiment"].count(",") == 7  # the launcher changes where jobs run, not which
