@@ -100,11 +100,23 @@ HEADER = ["env", "method", "reached / seeds", "steps-to-goal per seed", "mean ±
           "IQM [95 % CI]", "Welch p", "paper"]  # fmt: skip
 
 
-def to_markdown(table: pd.DataFrame, incomplete: pd.DataFrame, reference: str) -> str:
-    """The table, its note and the runs not finished, as one Markdown document."""
+def compute_line(runs: pd.DataFrame) -> str:
+    """The compute the finished runs took: their summed ``wall_seconds`` (each run one torch thread, so about its
+    CPU time; a run sharing the cores with others took longer than it would alone), per env."""
+    if runs.empty:
+        return "Compute: no finished run."
+    hours = runs.groupby("env", sort=True)["wall_seconds"].agg(["count", "sum"])
+    parts = [f"{env} {int(r['count'])} runs, {r['sum'] / 3600:.1f} h" for env, r in hours.iterrows()]
+    return ("Compute (the finished runs' summed `wall_seconds`, one torch thread each, so about CPU-hours; runs that "
+            f"shared the cores count their own, longer, time): {'; '.join(parts)}.")
+
+
+def to_markdown(table: pd.DataFrame, incomplete: pd.DataFrame, reference: str, compute: str = "") -> str:
+    """The table, its note, the compute the runs took and the runs not finished, as one Markdown document."""
     lines = ["| " + " | ".join(HEADER) + " |", "|" + "---|" * len(HEADER)]
     lines += ["| " + " | ".join(c.replace("|", "\\|") for c in _cells(r)) + " |" for r in table.itertuples(index=False)]
     lines += ["", NOTE.format(reference=reference), ""]
+    lines += [compute, ""] if compute else []
     if incomplete.empty:
         lines.append("Every run below the directory finished (has `summary.json`).")
     else:
@@ -145,7 +157,7 @@ def write_tables(root: Path, out: Path, reference: str = DEFAULT_REFERENCE, grou
     table = steps_table(pool_rows(label_rows(runs, group_by), pools), reference, paper_numbers()) if not runs.empty \
         else pd.DataFrame(columns=["env", "row"])  # fmt: skip
     out.mkdir(parents=True, exist_ok=True)
-    (out / "steps_to_goal.md").write_text(to_markdown(table, incomplete, reference))
+    (out / "steps_to_goal.md").write_text(to_markdown(table, incomplete, reference, compute_line(runs)))
     (out / "steps_to_goal.tex").write_text(to_latex(table))
     table.to_csv(out / "steps_to_goal.csv", index=False, float_format="%.6g", lineterminator="\n")
     cols = ["env", "method", "seed", "status", "detail", "run_dir"]

@@ -137,3 +137,11 @@ def test_a_directory_s_analysis_yaml_makes_its_tables_with_the_bare_command(tmp_
     (runs / "analysis.yaml").write_text("pools: []\n")
     bad = analysis("tables", runs)
     assert bad.returncode == 1 and bad.stderr.count("\n") == 1 and "allowed: pool, group_by, reference" in bad.stderr
+
+
+def test_the_compute_line_sums_the_finished_runs_wall_seconds_per_env() -> None:
+    from analysis.tables import compute_line
+
+    runs = pd.DataFrame({"env": ["acrobot", "acrobot", "mountaincar"], "wall_seconds": [1800.0, 3600.0, 720.0]})
+    assert compute_line(runs).endswith("acrobot 2 runs, 1.5 h; mountaincar 1 runs, 0.2 h.")
+    assert compute_line(runs.iloc[:0]) == "Compute: no finished run."
