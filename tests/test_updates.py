@@ -64,6 +64,14 @@ def test_relabelled_rewards_are_the_intrinsic_reward_of_every_stored_transition_
     assert torch.allclose(rel.values, direct.float(), rtol=1e-4, atol=1e-5)  # reused latents = recomputed ones
     newer = torch.tensor([agent.replay.total_added, agent.replay.total_added + 5])
     assert rel.lookup(newer).tolist() == [0.0, 0.0]  # added since: 0 until the next relabel (NSRS)
+    by_refresh, by_relabel = [], []
+    refresh_encode, relabel_encode = agent.novelty.encode, agent._encode_eval
+    agent.novelty.encode = lambda obs: by_refresh.append(len(obs)) or refresh_encode(obs)
+    agent._encode_eval = lambda obs: by_relabel.append(len(obs)) or relabel_encode(obs)
+    agent._relabel()
+    # every stored o_t encoded once, by the memory refresh; the relabel reuses those latents and encodes only the
+    # newest transition's o_{t+1} (one continuing episode: every other o_{t+1} is the next transition's o_t)
+    assert sum(by_refresh) == len(agent.replay) and by_relabel == [1]
     again = RelabelledRewards()
     again.load_state_dict(rel.state_dict())
     assert torch.equal(again.lookup(torch.from_numpy(index)), rel.values)  # exact: a copy of the same tensor

@@ -282,9 +282,10 @@ class PaperAgent(Agent):
 
     def _relabel(self) -> None:
         assert self.relabelled is not None
-        if self.novelty is not None:
-            self.novelty.refresh()  # NSRS's memory: every stored state under the encoder just trained
-        self.relabelled.relabel(self.replay, self._encode_eval, self.intrinsic, self.device)
+        encoded = None
+        if self.novelty is not None:  # NSRS's memory: every stored state under the encoder just trained
+            encoded = self.novelty.refresh()  # its latents are the relabel's (exact memory: the same transitions)
+        self.relabelled.relabel(self.replay, self._encode_eval, self.intrinsic, self.device, encoded)
 
     def _td_loss(self, z0: torch.Tensor, z1: torch.Tensor, seg: SegmentBatch, first: TransitionBatch) -> torch.Tensor:
         """The Q-tree agent's TD loss on the segments' first transitions, r_ext + r_int (scored now, or NSRS's stored)."""

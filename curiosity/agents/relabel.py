@@ -29,15 +29,20 @@ class RelabelledRewards:
 
     @torch.no_grad()
     def relabel(self, replay: ReplayBuffer, encode: Callable[[Tensor], Tensor], reward: IntrinsicReward,
-                device: torch.device | str) -> None:  # fmt: skip
+                device: torch.device | str, encoded: tuple[np.ndarray, Tensor] | None = None) -> None:  # fmt: skip
         """Score every stored transition with ``reward`` on latents from ``encode`` ((B, *obs) -> (B, d), eval mode).
 
         Each stored observation is encoded once: a transition's o_{t+1} that is the next transition's o_t reuses that
         latent (:meth:`ReplayBuffer.follows`); only the others (episode ends, the newest) are encoded apart.
+        ``encoded``: (keys (M,), latents (M, d)) of o_t already encoded by the same encoder (a memory refresh), reused
+        when they are every stored transition's, oldest first.
         """
         n = len(replay)
         first = replay.total_added - n
-        z = torch.cat([encode(replay.all_obs(s, s + CHUNK).to(device)) for s in range(0, n, CHUNK)])
+        if encoded is not None and np.array_equal(encoded[0], np.arange(first, first + n)):
+            z = encoded[1]
+        else:
+            z = torch.cat([encode(replay.all_obs(s, s + CHUNK).to(device)) for s in range(0, n, CHUNK)])
         follows = torch.from_numpy(replay.follows()).to(z.device)
         values = []
         for s in range(0, n, CHUNK):

@@ -116,8 +116,12 @@ class LatentNovelty(IntrinsicReward):
             self.estimator.set_memory(self.memory.tensor())
 
     @torch.no_grad()
-    def refresh(self) -> None:
-        """Re-embed every memory row and the random-phase reference with the current encoder; refit the estimator."""
+    def refresh(self) -> tuple[np.ndarray, Tensor]:
+        """Re-embed every memory row and the random-phase reference with the current encoder; refit the estimator.
+
+        Returns:
+            The memory's keys (M,) (global transition indices) and the latents (M, d) of their o_t just encoded.
+        """
         keys = self.memory.keys().numpy()
         z = self._encode_stored(keys)
         if self.standardise:
@@ -134,6 +138,7 @@ class LatentNovelty(IntrinsicReward):
             reference = self.embed(z_ref, self.replay.actions_at(ref_keys).to(z.device))
         self.estimator.fit(self.memory.tensor(), reference, stream_size=self.memory.stands_for)
         self._ready = True
+        return keys, z
 
     @torch.no_grad()
     def drift(self, rows: int = 64) -> float:
