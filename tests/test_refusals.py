@@ -51,7 +51,7 @@ OUT_OF_RANGE = dict([
     _out_of_range("intrinsic.terms.pe.eps", "0"),
     _out_of_range("intrinsic.terms.pe.dropout_samples", "0"), _out_of_range("intrinsic.terms.novelty.memory_size", "0"),
     _out_of_range("intrinsic.terms.novelty.refresh_every", "0"), _out_of_range("agent.q_coef", "-1"),
-    _out_of_range("agent.q_target_every", "0"),
+    _out_of_range("agent.q_target_every", "0"), _out_of_range("agent.first_call_min_iterations", "-1"),
     _out_of_range("env.frame_size", "4"), _out_of_range("env.frame_stack", "0"), _out_of_range("env.state_dim", "0"),
     _out_of_range("env.n_actions", "1"), _out_of_range("env.coverage_bins", "[10,10,0,10]"),
     _out_of_range("budget.max_steps", "0"), _out_of_range("budget.warmup_steps", "-1"),

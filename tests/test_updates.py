@@ -92,8 +92,21 @@ def test_both_rules_train_and_resume_from_a_checkpoint(overrides: list[str], one
         assert other.optimizers[name].state_dict()["state"].keys() == agent.optimizers[name].state_dict()["state"].keys()
 
 
+def test_nsrs_first_call_trains_the_representation_alone_for_at_least_its_minimum(one_thread) -> None:
+    """NSRS's code: no Q step in the first training call, which runs >= 2001 iterations (its early-stop check); here
+    ``agent.first_call_min_iterations=30`` over a 16-iteration budget."""
+    agent = _filled(["baseline=nsrs", "budget.iters_per_train=16", "agent.first_call_min_iterations=30"], steps=12)
+    assert agent.schedule.calls == 1 and agent.q.updates == 0  # the first call: 30 iterations, no Q update
+    steps = {float(v["step"]) for v in agent.optimizers["model"].state_dict()["state"].values()}
+    assert steps == {30.0} and not agent.optimizers["q"].state_dict()["state"]  # 30 representation steps, no Q step
+    agent = _filled(["baseline=nsrs", "budget.iters_per_train=16", "agent.first_call_min_iterations=30"], steps=13)
+    assert agent.schedule.calls == 2 and agent.q.updates == 16  # the second call: the budget's 16, each with a Q step
+    assert compose_cfg(["baseline=nsrs"]).agent.first_call_min_iterations == 2001
+
+
 @pytest.mark.parametrize(("overrides", "key"), [
     (["agent.q_intrinsic=relabel"], "agent.q_intrinsic=relabel"),  # MPC has no Q
+    (["baseline=icm", "agent.first_call_min_iterations=100"], "agent.first_call_min_iterations=100"),
     (["baseline=icm", "agent.updates=nsrs"], "agent.updates=nsrs"),
     (["baseline=rnd", "agent.q_intrinsic=relabel"], "agent.q_intrinsic=relabel"),
 ])  # fmt: skip

@@ -254,6 +254,8 @@ class PaperAgent(Agent):
         logs.update(intrinsic.observe(batch))
         self._tally({k: v for k, v in logs.items() if not k.startswith(("planner/", "probe/"))})  # act() tallied those
         iterations = self.schedule.iterations(step)
+        if iterations and self.schedule.calls == 1:  # NSRS: the first call is never shorter than its early-stop check
+            iterations = max(iterations, int(self.cfg.agent.first_call_min_iterations))
         if iterations:
             logs.update(self._train(iterations))
         return logs
@@ -322,7 +324,7 @@ class PaperAgent(Agent):
             check_finite("losses/total", loss)
             step((self.optimizers["encoder"], self.optimizers["model"]), loss)
             total = loss.item()
-            if self.q is not None:
+            if self.q is not None and self.schedule.calls > 1:  # NSRS trains no Q in its first training call
                 z0 = self.model.encode(seg.obs[:, 0])
                 with torch.no_grad():
                     z1 = self.model.encode(seg.obs[:, 1])
@@ -331,7 +333,7 @@ class PaperAgent(Agent):
                 logs["losses/q"] = q_loss.item() / weights["q"] if weights["q"] else 0.0
                 total += q_loss.item()
         logs["losses/total"] = total
-        if self.q is not None:
+        if self.q is not None and "losses/q" in logs:
             self.q.after_update()
         eval_error = 0.0
         if self.schedule.early_stop_every:

@@ -6,8 +6,8 @@ Q-tree agent included.
 ``nsrs``: as NSRS's code steps (nsrs-protocol.md §3.3): a representation step -- one backward pass of the
 representation loss, then an optimiser over the encoder alone *and* one over the whole world model (so the encoder gets
 two updates, with separate moment estimates) -- then, for a Q-tree agent, a Q step: the TD loss recomputed with the
-updated encoder, its gradients clamped elementwise to [-1, 1], and a third optimiser over encoder + Q. Every optimiser
-is built from ``agent.optimizer``.
+updated encoder, its gradients clamped elementwise to [-1, 1], and a third optimiser over encoder + Q; as in NSRS, the
+first training call has no Q step (the representation trains alone). Every optimiser is built from ``agent.optimizer``.
 """
 
 from __future__ import annotations

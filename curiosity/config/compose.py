@@ -107,6 +107,7 @@ LEGACY: dict[str, Any] = {
     "planner.commit": 1,
     "agent.updates": "joint",
     "agent.q_intrinsic": "batch",
+    "agent.first_call_min_iterations": 0,
 }
 
 

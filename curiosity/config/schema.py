@@ -370,6 +370,7 @@ class AgentKeysConfig:
     # curiosity/agents/relabel.py): ours, or NSRS's code's
     updates: UpdateRule = UpdateRule.joint  # joint: one optimiser, one step on L | nsrs: representation step, then Q step
     q_intrinsic: QIntrinsic = QIntrinsic.batch  # batch: score each sampled batch | relabel: the buffer, after training
+    first_call_min_iterations: int = 0  # the first training call runs at least this many iterations (NSRS: 2001)
 
 
 # ---------------------------------------------------------------- top level

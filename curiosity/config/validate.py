@@ -44,6 +44,7 @@ RULES: list[Rule] = [
     ("intrinsic.terms.novelty.memory_size", lambda v: v >= 1, "an integer >= 1"),
     ("intrinsic.terms.novelty.refresh_every", lambda v: v >= 1, "an integer >= 1"),
     ("agent.q_coef", lambda v: v >= 0, "a number >= 0"),
+    ("agent.first_call_min_iterations", lambda v: v >= 0, "an integer >= 0 (0: the budget's first call)"),
     ("agent.q_target_every", lambda v: v >= 1, "an integer >= 1"),
     ("env.frame_size", lambda v: v >= 8, "an integer >= 8"),
     ("env.frame_stack", lambda v: v >= 1, "an integer >= 1"),
@@ -123,8 +124,8 @@ def _cross_field_errors(cfg: DictConfig) -> list[str]:
         errors.append(f"device={device}: baseline={cfg.baseline.name} runs on the CPU only (its intrinsic-reward "
                       "networks do not move to a device yet); allowed: device=cpu")  # fmt: skip
     if cfg.baseline._target_ != "curiosity.agents.paper.PaperAgent":  # the Q agent (ICM, RND) and random
-        for key, ours in (("updates", "joint"), ("q_intrinsic", "batch")):
-            if choice(cfg.agent[key]) != ours:
+        for key, ours in (("updates", "joint"), ("q_intrinsic", "batch"), ("first_call_min_iterations", "0")):
+            if str(choice(cfg.agent[key])) != ours:
                 errors.append(f"agent.{key}={choice(cfg.agent[key])}: only the paper's agent and NSRS read it, not "
                               f"baseline={cfg.baseline.name}; allowed: agent.{key}={ours}")  # fmt: skip
     elif choice(cfg.agent.q_intrinsic) == "relabel" and cfg.planner.name != "qtree":
