@@ -88,8 +88,8 @@ def test_every_registered_reward_through_the_interface(option: str, extra: list[
     twin.intrinsic.load_state_dict(copy.deepcopy(reward.state_dict()))
     if isinstance(agent, PaperAgent):
         twin.model.load_state_dict(agent.model.state_dict())
-    # exact: same machine, same process, same inputs and state (the checkpoint round trip the product promises)
-    torch.testing.assert_close(twin.intrinsic.compute(batch), out, rtol=0, atol=0)
+    # the checkpoint round trip the product promises: the same values, to the bit
+    torch.testing.assert_close(twin.intrinsic.compute(batch), out, rtol=0, atol=0)  # exact: same machine, process, inputs
 
 
 def test_the_hybrid_is_the_papers_equation_11() -> None:
