@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import fnmatch
 import math
+from collections.abc import Iterator
 
 import numpy as np
 import pandas as pd
@@ -45,8 +46,12 @@ def _row_stats(values: list[float], reference: list[float], is_reference: bool) 
             "welch_p": math.nan if is_reference else welch_p(values, reference)}  # fmt: skip
 
 
-def _reference_rows(rows: pd.Series, reference: str) -> pd.Series:
-    return rows.map(lambda r: fnmatch.fnmatchcase(r, reference))
+def _by_row(at: pd.DataFrame, reference: str) -> Iterator[tuple[str, str, pd.DataFrame, dict[str, float]]]:
+    """(env, row, its runs, their statistics against the reference rows of the env) for the runs ``at`` (column ``v``)."""
+    is_ref = at["row"].map(lambda r: fnmatch.fnmatchcase(r, reference))
+    for (env, row), g in at.groupby(["env", "row"], sort=True):
+        ref = at[(at["env"] == env) & is_ref]["v"].tolist()
+        yield env, row, g, _row_stats(g["v"].tolist(), ref, fnmatch.fnmatchcase(row, reference))
 
 
 def spread_table(metrics: pd.DataFrame, reference: str, steps: tuple[int, ...] = SPREAD_STEPS) -> pd.DataFrame:
@@ -58,12 +63,9 @@ def spread_table(metrics: pd.DataFrame, reference: str, steps: tuple[int, ...] =
     out = []
     for step in steps:
         values = pd.Series({d: _value_at(g, YARDSTICK, step) for d, g in per_run}).rename("v")
-        at = first.join(values).dropna(subset=["v"])
-        for (env, row), g in at.groupby(["env", "row"], sort=True):
-            ref = at[(at["env"] == env) & _reference_rows(at["row"], reference)]["v"].tolist()
-            is_ref = fnmatch.fnmatchcase(row, reference)
+        for env, row, g, stats in _by_row(first.join(values).dropna(subset=["v"]), reference):
             out.append({"env": env, "row": row, "step": step, "per_seed": " ".join(f"{v:.2f}" for v in g["v"]),
-                        **_row_stats(g["v"].tolist(), ref, is_ref)})  # fmt: skip
+                        **stats})  # fmt: skip
     return pd.DataFrame(out)
 
 
@@ -80,13 +82,10 @@ def stable_table(metrics: pd.DataFrame, reference: str) -> pd.DataFrame:
                          "v": last if math.isnan(s) else s})  # fmt: skip
     if not runs:
         return pd.DataFrame()
-    at = pd.DataFrame(runs)
     out = []
-    for (env, row), g in at.groupby(["env", "row"], sort=True):
-        ref = at[(at["env"] == env) & _reference_rows(at["row"], reference)]["v"].tolist()
+    for env, row, g, stats in _by_row(pd.DataFrame(runs), reference):
         per_seed = " ".join(f"{v:.0f}" if ok else f">{v:.0f}" for v, ok in zip(g["v"], g["stable"], strict=True))
-        out.append({"env": env, "row": row, "stable": int(g["stable"].sum()), "per_seed": per_seed,
-                    **_row_stats(g["v"].tolist(), ref, fnmatch.fnmatchcase(row, reference))})  # fmt: skip
+        out.append({"env": env, "row": row, "stable": int(g["stable"].sum()), "per_seed": per_seed, **stats})
     return pd.DataFrame(out)
 
 

@@ -311,29 +311,27 @@ class PaperAgent(Agent):
         first = seg.first_step().with_latents(enc.z[:, 0].detach(), enc.z[:, 1].detach())
         logs.update(self.intrinsic.update(first))  # rewards that learn (ICM, RND) take their step
         weights = self.weights.of_terms()
+        q_step = self.q is not None and (self.updates == "joint" or self.schedule.calls > 1)  # NSRS: none in call 1
+        if q_step and self.updates == "joint":  # one step on every term, the TD term included
+            terms["q"] = self._td_loss(enc.z[:, 0], enc.z[:, 1], seg, first)
+            logs["losses/q"] = terms["q"].item()
+        loss = total_loss(terms, weights)
+        check_finite("losses/total", loss)
         if self.updates == "joint":
-            if self.q is not None:
-                terms["q"] = self._td_loss(enc.z[:, 0], enc.z[:, 1], seg, first)
-                logs["losses/q"] = terms["q"].item()
-            loss = total_loss(terms, weights)
-            check_finite("losses/total", loss)
             step(self.optimizers.values(), loss)
-            total = loss.item()
-        else:
-            loss = total_loss(terms, weights)
-            check_finite("losses/total", loss)
+        else:  # the representation step, then the Q step with the updated encoder
             step((self.optimizers["encoder"], self.optimizers["model"]), loss)
-            total = loss.item()
-            if self.q is not None and self.schedule.calls > 1:  # NSRS trains no Q in its first training call
-                z0 = self.model.encode(seg.obs[:, 0])
-                with torch.no_grad():
-                    z1 = self.model.encode(seg.obs[:, 1])
-                q_loss = weights["q"] * self._td_loss(z0, z1, seg, first)
-                step((self.optimizers["q"],), q_loss, clamp=Q_GRAD_CLAMP)
-                logs["losses/q"] = q_loss.item() / weights["q"] if weights["q"] else 0.0
-                total += q_loss.item()
-        logs["losses/total"] = total
-        if self.q is not None and "losses/q" in logs:
+        logs["losses/total"] = loss.item()
+        if q_step and self.updates != "joint":
+            z0 = self.model.encode(seg.obs[:, 0])
+            with torch.no_grad():
+                z1 = self.model.encode(seg.obs[:, 1])
+            q_loss = weights["q"] * self._td_loss(z0, z1, seg, first)
+            step((self.optimizers["q"],), q_loss, clamp=Q_GRAD_CLAMP)
+            logs["losses/q"] = q_loss.item() / weights["q"] if weights["q"] else 0.0
+            logs["losses/total"] += q_loss.item()
+        if q_step:
+            assert self.q is not None
             self.q.after_update()
         eval_error = 0.0
         if self.schedule.early_stop_every:
