@@ -20,6 +20,7 @@ from typing import Any
 import torch
 
 from curiosity.config import setup
+from curiosity.runtime.allocator import keep_freed_memory
 from runners.benchmark.baseline import speedup_vs
 from runners.benchmark.components import env_steps_per_s, planning_at, train_iter_ms
 from runners.benchmark.runs import seed_runs, sweep_speedup
@@ -64,13 +65,15 @@ def _by_memory(at: dict[int, dict[str, float]]) -> dict[str, Any]:
 
 def measure(args: argparse.Namespace, seed_dir: Path) -> dict[str, Any]:
     default_batch = 64
-    res: dict[str, Any] = {"machine": machine(), "quick": args.quick}
+    # the allocator setting every run makes (curiosity/runtime/allocator.py): components timed as runs see them
+    res: dict[str, Any] = {"machine": {**machine(), "keep_freed_memory": keep_freed_memory()}, "quick": args.quick}
     res["env_steps_per_s"] = {p: round(env_steps_per_s("acrobot", p, 150 if args.quick else 400), 1)
                               for p in ("gym", "fast", "state")}  # fmt: skip
     res["train_iter_ms"] = train_iter_ms(args.batches, args.repeats)
     base = speedup_vs(args.baseline_commit, default_batch, args.repeats, args.threads, rounds=1 if args.quick else 2)
     res["train_iter_baseline"] = base
     res["train_iter_speedup_vs_baseline"] = base["speedup"]
+    res["train_iter_speedup_same_allocator"] = base["speedup_same_allocator"]
     res.update(_by_memory({n: planning_at(n, args.repeats) for n in args.memory}))
     size = args.reservoir
     reservoir = ["intrinsic.terms.novelty.memory_mode=reservoir", f"intrinsic.terms.novelty.memory_size={size}"]
@@ -101,7 +104,9 @@ def report(res: dict[str, Any]) -> str:
     lines += ["", "| batch | ms per training iteration |", "|---|---|"]
     lines += [f"| {k} | {v:.1f} |" for k, v in res["train_iter_ms"].items()]
     lines += ["", f"training iteration at batch {b['batch']}: {b['ms']:.1f} ms here, {b['baseline_ms']:.1f} ms at "
-              f"{b['commit']} (side by side): speed-up {b['speedup']:.2f}x"]  # fmt: skip
+              f"{b['commit']} (side by side): speed-up {b['speedup']:.2f}x; with the same allocator setting for "
+              f"both, {b['ms_same_allocator']:.1f} vs {b['baseline_ms_same_allocator']:.1f} ms: "
+              f"{b['speedup_same_allocator']:.2f}x"]  # fmt: skip
     lines += ["", "| memory N | ms per planning step | ms per refresh | log rho error median / p99 |", "|---|---|---|---|"]
     for n, ms in res["plan_step_ms"].items():
         e = res["novelty_log_rho_error"][n]

@@ -94,7 +94,9 @@ def test_parse_defaults_and_report_render() -> None:
         "quick": True,
         "env_steps_per_s": {"gym": 1.0, "fast": 2.0, "state": 3.0},
         "train_iter_ms": {64: 10.0},
-        "train_iter_baseline": {"batch": 64, "ms": 10.0, "baseline_ms": 25.0, "commit": "abc", "speedup": 2.5},
+        "train_iter_baseline": {"batch": 64, "ms": 10.0, "baseline_ms": 25.0, "commit": "abc", "speedup": 2.5,
+                                "ms_same_allocator": 10.0, "baseline_ms_same_allocator": 15.0,
+                                "speedup_same_allocator": 1.5},
         "plan_step_ms": {1000: 3.0},
         "refresh_ms": {1000: 5.0},
         "novelty_log_rho_error": {1000: {"median": 0.0, "p99": 0.0}},
@@ -105,7 +107,8 @@ def test_parse_defaults_and_report_render() -> None:
         "wall_share": {"train": 0.5, "other": 0.5},
     }
     text = report(res)
-    assert "speed-up 2.50x" in text and "| 100 | 200 | 100 |" in text and "train 50.0%" in text
+    assert "speed-up 2.50x" in text and "10.0 vs 15.0 ms: 1.50x" in text
+    assert "| 100 | 200 | 100 |" in text and "train 50.0%" in text
     assert "| 1,000 (reservoir 500) | 2.0 | 4.0 | 0.1 / 0.5 |" in text
 
 
@@ -116,5 +119,6 @@ def test_baseline_commit_is_timed_from_its_own_worktree_and_removed() -> None:
 
     out = speedup_vs("HEAD", batch=4, repeats=1, threads=1, rounds=1)
     assert out["ms"] > 0 and out["baseline_ms"] > 0 and out["speedup"] == out["baseline_ms"] / out["ms"]
+    assert out["speedup_same_allocator"] == out["baseline_ms_same_allocator"] / out["ms_same_allocator"]
     listed = subprocess.run(["git", "worktree", "list"], cwd=REPO, capture_output=True, text=True).stdout
     assert f"baseline-{os.getpid()}" not in listed  # its own worktree is removed (others', e.g. a second suite's, may be)

@@ -41,14 +41,18 @@ def _rows(path: Path) -> int:
         return -1
 
 
-def test_same_seed_same_metrics_and_killed_runs_resume_to_the_same_metrics(tmp_path: Path) -> None:
+def test_same_seed_same_metrics_and_killed_runs_resume_to_the_same_metrics(tmp_path: Path, monkeypatch) -> None:
     first, second, killed = tmp_path / "first", tmp_path / "second", tmp_path / "killed"
     for out in (first, second):
+        if out == second:  # glibc's default mmap threshold, fixed: the run leaves its allocator alone (allocator.py)
+            monkeypatch.setenv("MALLOC_MMAP_THRESHOLD_", "131072")
         res = run_cli([*ARGS, f"hydra.run.dir={out}"], cwd=tmp_path)
         assert res.returncode == 0, res.stderr[-2000:]
+    monkeypatch.delenv("MALLOC_MMAP_THRESHOLD_")
     reference = metrics_without_wall_clock(first)
     assert len(reference) == 13  # header + steps 10..120
-    assert metrics_without_wall_clock(second) == reference  # exact: determinism (same config, seed and machine), as promised
+    # exact: determinism (same config, seed and machine), as promised; where memory comes from changes no number
+    assert metrics_without_wall_clock(second) == reference
 
     # Kill -9 after the rows of env steps 30, 70 and 100 are written (wherever the run is then), resume each time.
     env = {**os.environ, "PYTHONPATH": str(REPO)}

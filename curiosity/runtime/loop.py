@@ -22,6 +22,7 @@ from curiosity.envs import GridCoverage, make_env
 from curiosity.envs.adapter import adapter_of
 from curiosity.envs.state import env_state, restore_env
 from curiosity.errors import NumericalFault, RunDirectoryError
+from curiosity.runtime.allocator import keep_freed_memory
 from curiosity.runtime.behaviour import BehaviourTracker
 from curiosity.runtime.checkpoint import RunLock, load_checkpoint, rng_states, save_checkpoint, set_rng_states
 from curiosity.runtime.logger import RunLogger
@@ -132,6 +133,7 @@ class _Run:
 
     def __init__(self, cfg: DictConfig, run_dir: Path, ckpt: dict[str, Any] | None) -> None:
         self.cfg, self.run_dir = cfg, run_dir
+        keep_freed_memory()  # no page faults on every iteration's activations (curiosity/runtime/allocator.py)
         seed_everything(cfg.seed, deterministic=cfg.deterministic, threads=cfg.threads)
         self.env = make_env(cfg.env, cfg.budget.max_steps)
         self.adapter = adapter_of(cfg.env)

@@ -1,7 +1,11 @@
 """Training-iteration speed of another commit, measured side by side with this tree (``--baseline-commit``).
 
 Both trees run the same small script in a fresh process (the commit's own code, through a temporary ``git worktree``),
-alternately, so a change of machine load hits both; the speed-up is the ratio of the medians over rounds.
+alternately, so a change of machine load hits both; the speed-up is the ratio of the medians over rounds. Twice:
+
+- ``speedup``: each tree as its runs train, with the allocator setting a run of that tree makes (this tree's
+  ``keep_freed_memory``; none at an older commit);
+- ``speedup_same_allocator``: both with the same fixed glibc thresholds, so only the code of the iteration differs.
 """
 
 from __future__ import annotations
@@ -16,10 +20,17 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
 
-# uses only APIs every commit of the project has had: compose_config, build, make_env, replay.add, agent._iteration
+# uses only APIs every commit of the project has had: compose_config, build, make_env, replay.add, agent._iteration;
+# the allocator setting a run makes, where the tree has one (curiosity/runtime/allocator.py)
 SCRIPT = """
 import json, sys, time, statistics
 import numpy as np, torch
+try:
+    from curiosity.runtime.allocator import keep_freed_memory
+except ImportError:  # a tree from before it: its runs did not set it
+    pass
+else:
+    keep_freed_memory()
 from curiosity.config import build
 from curiosity.config.compose import compose_config
 from curiosity.envs import make_env
@@ -48,8 +59,13 @@ print(json.dumps(statistics.median(times)))
 """
 
 
-def _iteration_ms(tree: Path, batch: int, repeats: int, threads: int) -> float:
-    env = {**os.environ, "PYTHONPATH": str(tree), "OMP_NUM_THREADS": str(threads), "SDL_VIDEODRIVER": "dummy"}
+# The same fixed thresholds for both trees (what keep_freed_memory sets; an environment's setting takes precedence).
+SAME_ALLOCATOR = {"MALLOC_MMAP_THRESHOLD_": str(32 * 2**20), "MALLOC_TRIM_THRESHOLD_": str(64 * 2**20)}
+
+
+def _iteration_ms(tree: Path, batch: int, repeats: int, threads: int, extra_env: dict[str, str]) -> float:
+    env = {**os.environ, "PYTHONPATH": str(tree), "OMP_NUM_THREADS": str(threads), "SDL_VIDEODRIVER": "dummy",
+           **extra_env}  # fmt: skip
     done = subprocess.run([sys.executable, "-c", SCRIPT, str(batch), str(repeats), str(threads)], cwd=tree, env=env,
                           capture_output=True, text=True, check=False)  # fmt: skip
     if done.returncode:
@@ -58,17 +74,23 @@ def _iteration_ms(tree: Path, batch: int, repeats: int, threads: int) -> float:
 
 
 def speedup_vs(commit: str, batch: int, repeats: int, threads: int, rounds: int = 2) -> dict[str, float | str]:
-    """ms per training iteration at ``batch`` here and at ``commit``, alternating ``rounds`` times; their ratio."""
+    """ms per training iteration at ``batch`` here and at ``commit``, alternating ``rounds`` times, each tree with its
+    runs' allocator setting and both with the same one; the ratios."""
     with tempfile.TemporaryDirectory() as tmp:
         tree = Path(tmp) / f"baseline-{os.getpid()}"  # git names the worktree after it: unique per process
         subprocess.run(["git", "worktree", "add", "--detach", str(tree), commit], cwd=REPO, check=True,
                        capture_output=True)  # fmt: skip
         try:
-            ours, theirs = [], []
+            ours, theirs, ours_same, theirs_same = [], [], [], []
             for _ in range(rounds):
-                theirs.append(_iteration_ms(tree, batch, repeats, threads))
-                ours.append(_iteration_ms(REPO, batch, repeats, threads))
+                theirs.append(_iteration_ms(tree, batch, repeats, threads, {}))
+                ours.append(_iteration_ms(REPO, batch, repeats, threads, {}))
+                theirs_same.append(_iteration_ms(tree, batch, repeats, threads, SAME_ALLOCATOR))
+                ours_same.append(_iteration_ms(REPO, batch, repeats, threads, SAME_ALLOCATOR))
         finally:
             subprocess.run(["git", "worktree", "remove", "--force", str(tree)], cwd=REPO, check=False, capture_output=True)
     here, there = statistics.median(ours), statistics.median(theirs)
-    return {"commit": commit, "batch": batch, "ms": here, "baseline_ms": there, "speedup": there / here}
+    here_same, there_same = statistics.median(ours_same), statistics.median(theirs_same)
+    return {"commit": commit, "batch": batch, "ms": here, "baseline_ms": there, "speedup": there / here,
+            "ms_same_allocator": here_same, "baseline_ms_same_allocator": there_same,
+            "speedup_same_allocator": there_same / here_same}  # fmt: skip
