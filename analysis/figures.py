@@ -11,7 +11,9 @@
   the common yardstick ``info/latent_logdet`` of every run on one scale;
 - ``intrinsic`` (Figure 7 analogue): ``intrinsic/reward`` against env steps, mean and band, with each row's median
   "stable" step (``analysis.curves``) dashed; ``stability.{md,csv}`` list the stable step of every seed;
-- ``behaviour``: ``behaviour/directed`` and ``behaviour/repeat`` against env steps, where runs log them.
+- ``behaviour``: ``behaviour/directed`` and ``behaviour/repeat`` against env steps, where runs log them;
+- ``tv_presses`` (only where some run has a noisy TV's remote, ``env.distractor=noisy_tv``): ``behaviour/tv``, the
+  fraction of the agent's steps that pressed the TV, against env steps, with a random policy's rate dotted.
 
 A panel whose runs do not log its column says so instead of being left out.
 """
@@ -197,9 +199,28 @@ def plot_behaviour(runs: pd.DataFrame, metrics: pd.DataFrame, out: Path) -> list
     return save(fig, out, "behaviour")
 
 
+def plot_tv_presses(runs: pd.DataFrame, metrics: pd.DataFrame, out: Path) -> list[Path]:
+    """``behaviour/tv`` against env steps per row, one panel per env; nothing when no run has a TV remote."""
+    if "behaviour/tv" not in metrics or metrics["behaviour/tv"].isna().all():
+        return []
+    logged = metrics.dropna(subset=["behaviour/tv"])
+    envs, colour = sorted(logged["env"].unique()), colours(logged["row"])
+    fig, axes = panels(len(envs))
+    for ax, env in zip(axes, envs, strict=True):
+        e = logged[logged["env"] == env]
+        for row, g in e.groupby("row", sort=True):
+            wide = per_run(g, "behaviour/tv")
+            _band(ax, wide, colour[row], f"{row} (n={wide.shape[1]})")
+        n_actions = int(e["config"].iloc[0].get("env.n_actions", 4))
+        ax.axhline(1 / n_actions, color="0.4", ls=":", lw=1, label=f"random policy (1/{n_actions})")
+        ax.set(xlabel="env steps", ylabel="TV presses (fraction of steps)", title=env, ylim=(0, 1))
+    legend_below(fig, axes)
+    return save(fig, out, "tv_presses")
+
+
 FIGURES: dict[str, Callable[[pd.DataFrame, pd.DataFrame, Path], list[Path]]] = {
     "steps_to_goal": plot_steps_to_goal, "reached_fraction": plot_reached_fraction, "coverage": plot_coverage,
-    "entropy": plot_entropy, "intrinsic": plot_intrinsic, "behaviour": plot_behaviour,
+    "entropy": plot_entropy, "intrinsic": plot_intrinsic, "behaviour": plot_behaviour, "tv_presses": plot_tv_presses,
 }  # fmt: skip
 
 

@@ -22,6 +22,8 @@ CAPTIONS = {
                "yardstick `info/latent_logdet` (log det of the next latents' covariance + 1e-3 I) of every run.",
     "intrinsic": "Figure 7 analogue: intrinsic reward (symlog scale), mean and band; dashed: a row's median stable step.",
     "behaviour": "Behaviour: the rate of directed actions and of repeated actions, where runs log them.",
+    "tv_presses": "Noisy TV: the fraction of the agent's steps that pressed the TV's remote, mean and band; dotted: a "
+                  "random policy.",
 }  # fmt: skip
 
 
@@ -36,7 +38,7 @@ def _command(o: Options) -> str:
 def write_report(o: Options) -> str:
     """Write the tables, the figures and ``README.md`` embedding them; returns the one-line result."""
     write_tables(o.root, o.out, o.args.reference or DEFAULT_REFERENCE, o.group_by, o.pools)
-    write_figures(o.root, o.out, o.group_by, o.pools)
+    written = {path.stem for path in write_figures(o.root, o.out, o.group_by, o.pools)}
     parts = [f"# Report: `{o.root}`", "",
              f"Written by `{_command(o)}` from the run directories' `summary.json`, `.hydra/config.yaml` and "
              "`metrics.csv`; re-running it rewrites these files byte for byte. Tables also as "
@@ -44,11 +46,11 @@ def write_report(o: Options) -> str:
              "[incomplete.csv](incomplete.csv).", "",
              "## Steps to goal", "", (o.out / "steps_to_goal.md").read_text().rstrip(), "",
              "## Stable intrinsic reward", "", (o.out / "stability.md").read_text().rstrip(), ""]  # fmt: skip
-    for name in ("spread", "stable_step"):  # the Figure 6 / Figure 7 tests, where runs log their columns
+    for name in ("spread", "stable_step", "distractor"):  # Figures 6 / 7 and the noisy TV, where runs log their columns
         if (o.out / f"{name}.md").is_file():
             parts += ["#" + (o.out / f"{name}.md").read_text().rstrip(), ""]
     parts += ["## Figures", ""]
-    for name in FIGURES:
+    for name in (n for n in FIGURES if n in written):  # the TV figure only where runs have a TV
         parts += [f"![{name}]({name}.png)", "", f"{CAPTIONS[name]} ([PDF]({name}.pdf))", ""]
     (o.out / "README.md").write_text("\n".join(parts))
     return f"report written to {o.out}/README.md"

@@ -5,7 +5,8 @@ writes ``steps_to_goal.{md,tex,csv}`` and ``incomplete.csv`` to DIR (default ``R
 method as its config defines it (``analysis.rows``): seeds, successes, every seed's value (a censored run as ``>cap``),
 mean ± SE with censored runs at their last step (the paper's Table 2 rule) and over successes only, median, IQM with
 a stratified-bootstrap 95 % CI, Welch's t-test p against the reference row, and the published number beside ours
-(``analysis/paper_numbers.yaml``). Runs without ``summary.json`` are listed apart, never dropped silently.
+(``analysis/paper_numbers.yaml``). Runs without ``summary.json`` are listed apart, never dropped silently. Where runs
+have a noisy TV, ``distractor.{md,csv}`` set each method with the TV beside itself without (``analysis.distractor``).
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ import yaml
 from analysis import claims
 from analysis.cli import Options, parser, run
 from analysis.collect import load_incomplete
+from analysis.distractor import write_distractor_table
 from analysis.rows import label_rows, load_runs, pool_rows
 from analysis.stats import iqm_ci, mean_se, welch_p
 
@@ -164,6 +166,7 @@ def write_tables(root: Path, out: Path, reference: str = DEFAULT_REFERENCE, grou
     incomplete.reindex(columns=cols).to_csv(out / "incomplete.csv", index=False, lineterminator="\n")
     if not runs.empty:
         write_curve_tables(root, out, reference, group_by, pools)
+        write_distractor_table(runs, out)
     return table
 
 

@@ -13,13 +13,14 @@ import yaml
 LOG_EVERY = 10
 
 
-def _config(env: str, method: str, seed: int, entropy: str, estimator: str, horizon: int) -> dict:
-    return {"env": {"name": env, "n_actions": 3}, "entropy": {"name": entropy, "coef": 1.0},
+def _config(env: str, method: str, seed: int, entropy: str, estimator: str, horizon: int, distractor: str) -> dict:
+    n_actions = 3 + (distractor == "noisy_tv")
+    return {"env": {"name": env, "n_actions": n_actions, "distractor": distractor}, "entropy": {"name": entropy, "coef": 1.0},
             "estimator": {"name": estimator}, "planner": {"name": "mpc", "horizon": horizon},
             "budget": {"name": "quick"}, "seed": seed, "progress": False, "threads": 1, "method_label": method}  # fmt: skip
 
 
-def _metrics(seed: int, last: int, estimator: str, behaviour: bool) -> pd.DataFrame:
+def _metrics(seed: int, last: int, estimator: str, behaviour: bool, tv_rate: float | None = None) -> pd.DataFrame:
     """Rows every 10 steps up to ``last``: coverage rising to last/10000, a decaying intrinsic reward (KDE settles
     sooner than kNN), entropy loss, yardstick, iterations and, with ``behaviour``, behaviour columns."""
     step = np.arange(LOG_EVERY, last + 1, LOG_EVERY)
@@ -34,25 +35,31 @@ def _metrics(seed: int, last: int, estimator: str, behaviour: bool) -> pd.DataFr
     if behaviour:
         df["behaviour/directed"] = np.clip(step / last, 0, 1)
         df["behaviour/repeat"] = 0.5
+    if tv_rate is not None:  # the remote pressed at this rate, from the first row on
+        df["behaviour/tv"] = tv_rate
     return df
 
 
 def make_run(root: Path, env: str, method: str, seed: int, steps: int | None, cap: int = 3000, *, entropy: str = "none",
-             estimator: str = "kde", horizon: int = 3, status: str = "complete", behaviour: bool = True) -> Path:  # fmt: skip
+             estimator: str = "kde", horizon: int = 3, status: str = "complete", behaviour: bool = True,
+             distractor: str = "none", tv_rate: float | None = None) -> Path:  # fmt: skip
     """One run directory under ``root/<env>/<method>/h<horizon>/seed=<seed>``: ``steps`` is its steps-to-goal (None: it
-    hit ``cap``); ``status`` ``failed`` writes FAILED.json and ``stopped`` nothing more (both: no summary.json)."""
-    d = root / env / method / f"h{horizon}" / f"seed={seed}"
+    hit ``cap``); ``status`` ``failed`` writes FAILED.json and ``stopped`` nothing more (both: no summary.json). With
+    ``distractor`` (under ``<distractor>/`` then), ``tv_rate`` is the TV-press rate its summary and metrics report."""
+    d = root / env / method / f"h{horizon}" / (distractor if distractor != "none" else "") / f"seed={seed}"
     (d / ".hydra").mkdir(parents=True)
-    (d / ".hydra" / "config.yaml").write_text(yaml.safe_dump(_config(env, method, seed, entropy, estimator, horizon)))
+    config = _config(env, method, seed, entropy, estimator, horizon, distractor)
+    (d / ".hydra" / "config.yaml").write_text(yaml.safe_dump(config))
     last = steps if steps is not None else cap
     if status != "complete":
         last = min(last, 500)
-    _metrics(seed, last, estimator, behaviour).to_csv(d / "metrics.csv", index=False)
+    _metrics(seed, last, estimator, behaviour, tv_rate).to_csv(d / "metrics.csv", index=False)
     if status == "failed":
         (d / "FAILED.json").write_text(json.dumps({"error": "NumericalFault: losses/entropy is nan at env step 500"}))
     elif status == "complete":
         summary = {"method": method, "seed": seed, "env": env, "steps_to_goal": steps, "reached_goal": steps is not None,
-                   "env_steps": last, "max_steps": cap, "wall_seconds": 1.0}  # fmt: skip
+                   "env_steps": last, "max_steps": cap, "wall_seconds": 1.0,
+                   "behaviour": {"tv_rate": tv_rate} if tv_rate is not None else None}  # fmt: skip
         (d / "summary.json").write_text(json.dumps(summary))
     return d
 

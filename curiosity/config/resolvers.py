@@ -59,10 +59,15 @@ def one_minus(value: float) -> float:
     return 1.0 - float(value)
 
 
-def _env_actions(env_id: str) -> int:
+def _env_actions(env_id: str, distractor: str = "none") -> int:
     from curiosity.envs.adapter import env_actions  # imports gymnasium: only when a config asks
 
-    return env_actions(env_id)
+    return env_actions(env_id, distractor)
+
+
+def power(base: int, exponent: int) -> int:
+    """``${power:a,b}`` = a ** b (integers): the MPC planner's default cap, A^5 sequences."""
+    return int(base) ** int(exponent)
 
 
 def _env_state_dim(env_id: str) -> int:
@@ -72,10 +77,12 @@ def _env_state_dim(env_id: str) -> int:
 
 
 def register_resolvers() -> None:
-    """Register ``${run_variant:...}``, ``${help_groups:}``, ``${one_minus:...}``, ``${env_actions:<id>}`` and
-    ``${env_state_dim:<id>}``; safe to call more than once (jobs share a process)."""
+    """Register ``${run_variant:...}``, ``${help_groups:}``, ``${one_minus:...}``, ``${power:a,b}``,
+    ``${env_actions:<id>,<distractor>}`` and ``${env_state_dim:<id>}``; safe to call more than once (jobs share a
+    process)."""
     OmegaConf.register_new_resolver("run_variant", run_variant, replace=True)
     OmegaConf.register_new_resolver("help_groups", help_groups, replace=True)
     OmegaConf.register_new_resolver("one_minus", one_minus, replace=True)
+    OmegaConf.register_new_resolver("power", power, replace=True)
     OmegaConf.register_new_resolver("env_actions", _env_actions, replace=True)
     OmegaConf.register_new_resolver("env_state_dim", _env_state_dim, replace=True)

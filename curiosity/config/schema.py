@@ -26,6 +26,12 @@ class Renderer(Enum):
     fast = "fast"
 
 
+class Distractor(Enum):
+    none = "none"
+    noisy_tv = "noisy_tv"
+    noisy_tv_background = "noisy_tv_background"
+
+
 class Kernel(Enum):
     gaussian = "gaussian"
     yu = "yu"
@@ -86,6 +92,15 @@ class BandwidthRule(Enum):
 
 # ---------------------------------------------------------------- env
 @dataclass
+class TVConfig:
+    """The noisy TV's patch (curiosity/envs/distractor.py): side and top-left pixel in the frame."""
+
+    size: int = 5
+    row: int = 0
+    col: int = 0
+
+
+@dataclass
 class EnvConfig:
     """An environment (curiosity/envs/adapter.py): its adapter, gymnasium id, observations and coverage grid."""
 
@@ -97,7 +112,9 @@ class EnvConfig:
     frame_size: int = 32
     frame_stack: int = 4
     state_dim: int = "${env_state_dim:${.id}}"  # type: ignore[assignment]  # the env's own observation vector's length
-    n_actions: int = "${env_actions:${.id}}"  # type: ignore[assignment]  # from the env's action space
+    distractor: Distractor = Distractor.none  # none | noisy_tv (remote control: one added action) | noisy_tv_background
+    tv: TVConfig = field(default_factory=TVConfig)
+    n_actions: int = "${env_actions:${.id},${.distractor}}"  # type: ignore[assignment]  # the env's actions (+ the TV's)
     pixels_available: bool = True  # whether env.obs=pixels is possible (a renderer exists)
     coverage_low: list[float] = MISSING
     coverage_high: list[float] = MISSING
@@ -211,7 +228,7 @@ class MPCConfig:
     gamma: float = 0.9
     temperature: float = 0.02
     eta: float = 1.0
-    max_candidates: int = 243
+    max_candidates: int = "${power:${.n_actions},5}"  # type: ignore[assignment]  # A^5: 243 (3 actions), 1024 (a TV remote)
     sample_candidates: bool = False  # above max_candidates sequences: sample that many (true) or refuse (false)
     n_actions: int = "${env.n_actions}"  # type: ignore[assignment]
     temperature_scale: TemperatureScale = TemperatureScale.absolute

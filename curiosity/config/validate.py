@@ -185,6 +185,28 @@ def _pairing_errors(cfg: DictConfig) -> list[str]:
             f"allowed: encoder={fits} with env.obs={obs}{other}"]  # fmt: skip
 
 
+def _distractor_errors(cfg: DictConfig) -> list[str]:
+    """A noisy TV shows in frames (pixels only), inside the frame; its remote control needs the env's no-op."""
+    distractor = str(choice(cfg.env.get("distractor", "none")))
+    if distractor == "none":
+        return []
+    label = f"env.distractor={distractor}"
+    if choice(cfg.env.obs) != "pixels":
+        return [f"{label}: the noisy TV is a patch of the frame and env.obs={choice(cfg.env.obs)} has no frames; "
+                "allowed: env.obs=pixels, or env.distractor=none"]  # fmt: skip
+    size, row, col, side = int(cfg.env.tv.size), int(cfg.env.tv.row), int(cfg.env.tv.col), int(cfg.env.frame_size)
+    if not (1 <= size <= side and 0 <= row <= side - size and 0 <= col <= side - size):
+        return [f"env.tv.size={size}, env.tv.row={row}, env.tv.col={col}: the patch must lie inside the "
+                f"{side}x{side} frame; allowed: 1 <= size <= {side}, 0 <= row, col <= {side} - size"]  # fmt: skip
+    from curiosity.envs.adapter import adapter_of  # imports gymnasium: only once the config is read
+    from curiosity.envs.distractor import REMOTE
+
+    if distractor == REMOTE and adapter_of(cfg.env).noop_action is None:
+        return [f"{label}: the remote control applies the env's no-op and env={cfg.env.name} has none; allowed: "
+                "env.distractor=noisy_tv_background or none"]  # fmt: skip
+    return []
+
+
 def _largest_horizon(n_actions: int, limit: int) -> int:
     """The largest H with n_actions^H <= limit (0 when even H = 1 exceeds it)."""
     h = 0
@@ -246,7 +268,7 @@ def validate(cfg: DictConfig, rules: list[Rule] | None = None) -> None:
     """
     errors = _rule_errors(cfg, RULES if rules is None else rules)
     if not errors:
-        errors = _cross_field_errors(cfg) + _pairing_errors(cfg) + _planner_errors(cfg)
+        errors = _cross_field_errors(cfg) + _pairing_errors(cfg) + _distractor_errors(cfg) + _planner_errors(cfg)
     if not errors:  # imports the agents' code: only for a config that passed everything else
         errors = _intrinsic_errors(cfg)
     if errors:

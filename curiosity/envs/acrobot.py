@@ -43,3 +43,4 @@ class AcrobotAdapter(EnvAdapter):
 
     directed_action = staticmethod(directed)
     energy = staticmethod(energy)
+    noop_action = 1  # zero torque

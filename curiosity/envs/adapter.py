@@ -7,7 +7,8 @@ coverage grid, the behaviour columns, the oracle planner and the model probe nee
 - its **physical state** (read and set: checkpoints, coverage, branching the simulator);
 - whether a step **reached the goal**, which is not the same as terminating: a termination that is not the goal (a
   fallen pole) ends the episode, the loop resets the env and the run goes on; the goal ends the run (steps-to-goal);
-- its **directed action** (what a hand-made energy-pumping policy would do) and its **energy**, where it has them.
+- its **directed action** (what a hand-made energy-pumping policy would do) and its **energy**, where it has them;
+- its **no-op action**, where it has one (the noisy TV's remote control, :mod:`curiosity.envs.distractor`).
 
 The number of actions and the state vector's length come from the environment's own spaces (``env_actions`` and
 ``env_state_dim`` resolvers), not from hand-written YAML.
@@ -34,6 +35,7 @@ class EnvAdapter:
 
     directed_action: Callable[[np.ndarray], int | None] | None = None  # physical state -> the pumping action, or None
     energy: Callable[[np.ndarray], np.ndarray] | None = None  # physical states (..., P) -> mechanical energy (...)
+    noop_action: int | None = None  # the action that does nothing (the noisy TV's remote control applies it), or None
 
     def __init__(self, env_id: str) -> None:
         self.env_id = env_id
@@ -79,9 +81,12 @@ def _spaces(env_id: str) -> tuple[int, tuple[int, ...]]:
         env.close()
 
 
-def env_actions(env_id: str) -> int:
-    """``${env_actions:<id>}``: the number of discrete actions of gymnasium env ``env_id``."""
-    return _spaces(str(env_id))[0]
+def env_actions(env_id: str, distractor: str = "none") -> int:
+    """``${env_actions:<id>,<distractor>}``: the number of discrete actions of gymnasium env ``env_id``, plus the
+    actions its distractor adds (the noisy TV's remote control: one)."""
+    from curiosity.envs.distractor import extra_actions
+
+    return _spaces(str(env_id))[0] + extra_actions(str(getattr(distractor, "value", distractor)))  # an enum from a schema
 
 
 def env_state_dim(env_id: str) -> int:

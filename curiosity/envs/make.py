@@ -18,6 +18,8 @@ from gymnasium.wrappers import (
 from hydra.utils import instantiate
 
 from curiosity.config.build import choice
+from curiosity.envs.adapter import adapter_of
+from curiosity.envs.distractor import REMOTE, NoisyTV
 from curiosity.envs.wrappers import FastRenderObservation, NormalisePixels
 
 
@@ -39,8 +41,19 @@ def _fast_frames(cfg: Any, max_steps: int) -> gym.Env:
 _RENDERERS: dict[str, Callable[[Any, int], gym.Env]] = {"gym": _gym_frames, "fast": _fast_frames}
 
 
+def distractor_of(cfg: Any) -> str:
+    """The ``env`` node's ``distractor`` (``none`` for runs saved before it existed)."""
+    return str(choice(cfg.get("distractor", "none")))
+
+
 def _frames(cfg: Any, max_steps: int) -> gym.Env:
-    return NormalisePixels(_RENDERERS[choice(cfg.renderer)](cfg, max_steps))
+    env = NormalisePixels(_RENDERERS[choice(cfg.renderer)](cfg, max_steps))
+    distractor = distractor_of(cfg)
+    if distractor == "none":
+        return env
+    remote = distractor == REMOTE
+    noop = adapter_of(cfg).noop_action if remote else None
+    return NoisyTV(env, int(cfg.tv.size), int(cfg.tv.row), int(cfg.tv.col), remote=remote, noop_action=noop)
 
 
 def _pixels(cfg: Any, max_steps: int) -> gym.Env:
@@ -79,11 +92,13 @@ def make_env(cfg: Any, max_steps: int) -> gym.Env:
 
     Args:
         cfg: the ``env`` node: ``id``, ``obs`` (pixels | state), ``renderer`` (gym | fast), ``frame_size``,
-            ``frame_stack``, ``fast_renderer``.
+            ``frame_stack``, ``fast_renderer``, ``distractor`` (none | noisy_tv | noisy_tv_background) and ``tv``
+            (the noise patch: :mod:`curiosity.envs.distractor`).
         max_steps: the run's step cap; gymnasium's own episode limit (500 for Acrobot-v1) is raised to it.
 
     Returns:
         A gymnasium env. Pixels: observations (frame_stack, frame_size, frame_size) float32, (x - 128)/128, the last
-        ``frame_stack`` frames channel-first, the reset frame repeated at the start. State: the env's vector, float32.
+        ``frame_stack`` frames channel-first, the reset frame repeated at the start (with a distractor, each frame shows
+        the noise patch). State: the env's vector, float32.
     """
     return _OBS[choice(cfg.obs)](cfg, max_steps)

@@ -28,3 +28,4 @@ class MountainCarAdapter(EnvAdapter):
 
     directed_action = staticmethod(directed)
     energy = staticmethod(energy)
+    noop_action = 1  # no push

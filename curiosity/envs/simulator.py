@@ -5,6 +5,8 @@ sequence, from the state the run is in. The env's adapter reads and sets its phy
 hold all of it in ``env.unwrapped.state`` and are deterministic given it: Acrobot's torque noise is 0), so one private
 copy of the env can be set to any state and stepped. Observations go through the run's own observation wrappers
 (same renderer, same resizing and gray conversion, bit for bit), and frames are pushed onto a copy of the frame stack.
+With a noisy TV, the TV action steps the env's no-op; an imagined frame shows fresh noise where the action redraws
+it and the previous frame's patch where it stays frozen (:meth:`~curiosity.envs.distractor.NoisyTV.overlay`).
 The learned encoder must see imagined frames exactly as it sees real ones: frames of the other renderer (0.6 gray
 levels apart on average) moved the oracle's latents enough to swamp the novelty differences between candidates.
 """
@@ -19,6 +21,7 @@ import numpy as np
 
 from curiosity.config.build import choice
 from curiosity.envs.adapter import adapter_of
+from curiosity.envs.distractor import find_tv
 from curiosity.envs.make import make_single_obs_env, observe_state
 
 
@@ -50,6 +53,7 @@ class Simulator:
         self.core = self.env.unwrapped
         self.adapter = adapter_of(env_cfg)
         self.pixels = choice(env_cfg.obs) == "pixels"
+        self.tv = find_tv(self.env)
 
     def root(self, env: gym.Env, obs: np.ndarray) -> SimStates:
         """The branch point the run is at: its env's physical state and its current observation ``obs``."""
@@ -63,12 +67,14 @@ class Simulator:
         goal = np.zeros(len(states), dtype=bool)
         for i, a in enumerate(np.asarray(actions, dtype=np.int64)):
             self.adapter.set_physical_state(self.core, states.physical[i])
-            ob, _, terminated, _, info = self.core.step(int(a))
+            ob, _, terminated, _, info = self.core.step(int(a) if self.tv is None else self.tv.core_action(int(a)))
             physical[i] = self.adapter.physical_state(self.core)
             goal[i] = self.adapter.goal_reached(self.core, bool(terminated), info)
-            obs[i] = self._next_obs(states.obs[i], ob)
+            obs[i] = self._next_obs(states.obs[i], ob, int(a))
         return SimStates(physical, obs), goal
 
-    def _next_obs(self, obs: np.ndarray, env_obs: np.ndarray) -> np.ndarray:
+    def _next_obs(self, obs: np.ndarray, env_obs: np.ndarray, action: int) -> np.ndarray:
         new = observe_state(self.env, env_obs).astype(np.float32)
+        if self.tv is not None:
+            new = self.tv.overlay(new, obs[-1], action)
         return np.concatenate([obs[1:], new[None]], axis=0) if self.pixels else new

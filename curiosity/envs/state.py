@@ -9,6 +9,7 @@ import numpy as np
 from gymnasium.wrappers import FrameStackObservation, TimeLimit
 
 from curiosity.envs.adapter import EnvAdapter
+from curiosity.envs.distractor import NoisyTV
 
 
 def _wrappers(env: gym.Env):
@@ -18,7 +19,8 @@ def _wrappers(env: gym.Env):
 
 
 def env_state(env: gym.Env, adapter: EnvAdapter) -> dict[str, Any]:
-    """Physical state (read by the env's adapter), the env's RNG, stacked frames and the time-limit counter."""
+    """Physical state (read by the env's adapter), the env's RNG, stacked frames, the time-limit counter and the
+    noisy TV's patch and generator (with a distractor)."""
     state: dict[str, Any] = {"physical": adapter.physical_state(env).copy(),
                              "np_random": env.unwrapped.np_random.bit_generator.state}  # fmt: skip
     for w in _wrappers(env):
@@ -26,6 +28,8 @@ def env_state(env: gym.Env, adapter: EnvAdapter) -> dict[str, Any]:
             state["frames"] = [np.array(f, copy=True) for f in w.obs_queue]
         elif isinstance(w, TimeLimit):
             state["elapsed"] = w._elapsed_steps
+        elif isinstance(w, NoisyTV):
+            state["tv"] = w.state_dict()
     return state
 
 
@@ -40,3 +44,5 @@ def restore_env(env: gym.Env, state: dict[str, Any], seed: int, adapter: EnvAdap
             w.obs_queue.extend(np.array(f, copy=True) for f in state["frames"])
         elif isinstance(w, TimeLimit):
             w._elapsed_steps = state["elapsed"]
+        elif isinstance(w, NoisyTV):
+            w.load_state_dict(state["tv"])

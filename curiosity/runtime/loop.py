@@ -20,6 +20,7 @@ from curiosity.config import ConfigError, build, sampled_candidates, validate
 from curiosity.config.compose import LEGACY
 from curiosity.envs import GridCoverage, make_env
 from curiosity.envs.adapter import adapter_of
+from curiosity.envs.distractor import find_tv
 from curiosity.envs.state import env_state, restore_env
 from curiosity.errors import NumericalFault, RunDirectoryError
 from curiosity.runtime.allocator import keep_freed_memory
@@ -72,6 +73,8 @@ def _differences(saved: dict[str, Any], now: dict[str, Any], prefix: str = "") -
     out = []
     for key in sorted(set(saved) | set(now)):
         a, b = saved.get(key, _MISSING), now.get(key, _MISSING)
+        if a is _MISSING and isinstance(b, dict) and any(k.startswith(f"{prefix}{key}.") for k in LEGACY):
+            a = {}  # a node added since: each of its keys is checked against LEGACY
         if isinstance(a, dict) and isinstance(b, dict):
             out += _differences(a, b, f"{prefix}{key}.")
         elif a is _MISSING and f"{prefix}{key}" in LEGACY and str(b) == str(LEGACY[f"{prefix}{key}"]):
@@ -139,7 +142,9 @@ class _Run:
         self.adapter = adapter_of(cfg.env)
         self.agent: Agent = build(cfg.baseline, cfg=cfg)
         self.agent.attach_env(self.env)
-        self.behaviour = BehaviourTracker(int(self.env.action_space.n), self.adapter.directed_action)
+        tv = find_tv(self.env)
+        self.behaviour = BehaviourTracker(int(self.env.action_space.n), self.adapter.directed_action,
+                                          tv.tv_action if tv is not None else None)  # fmt: skip
         self.coverage = GridCoverage(cfg.env.coverage_low, cfg.env.coverage_high, cfg.env.coverage_bins)
         self.rng = np.random.default_rng(cfg.seed)
         self.step, self.steps_to_goal, self.wall_before, self.resets = 0, None, 0.0, 0
