@@ -18,7 +18,6 @@ from typing import Any
 
 import numpy as np
 import torch
-from scipy.stats import spearmanr
 from torch import Tensor
 
 from curiosity.intrinsic.base import IntrinsicContext, IntrinsicReward, latents_of
@@ -214,6 +213,8 @@ class PredictionError(IntrinsicReward):
         est, err = np.array(self.pairs).T
         if np.ptp(est) == 0 or np.ptp(err) == 0:
             return None
+        from scipy.stats import spearmanr  # on first use: importing scipy.stats takes ~1 s
+
         return float(spearmanr(est, err).statistic)
 
     def state_dict(self) -> dict[str, Any]:

@@ -18,7 +18,6 @@ from collections.abc import Callable
 
 import numpy as np
 import torch
-from scipy.stats import spearmanr
 from torch import Tensor
 
 from curiosity.envs.simulator import Simulator, SimStates
@@ -86,6 +85,8 @@ def probe_model(planner: MPCPlanner, z0: Tensor, step_fn: StepFn, reward_fn: Sco
     replay = ReplayRollout(z0, true) if full else SimulatorRollout(simulator, root, z0, encode)
     g_true = planner.scores(z0, seqs, step_fn, reward_fn, intrinsic_fn, rollout=replay).cpu().numpy()
     if np.ptp(g_model) > 0 and np.ptp(g_true) > 0:
+        from scipy.stats import spearmanr  # on first use: importing scipy.stats takes ~1 s
+
         out["probe/spearman"] = float(spearmanr(g_model, g_true).statistic)
     out["probe/agree"] = float(int(seqs[int(np.argmax(g_model)), 0]) == int(seqs[int(np.argmax(g_true)), 0]))
     return out
