@@ -70,7 +70,7 @@ def test_remote_control_redraws_the_patch_and_applies_the_noop(name: str) -> Non
             assert changed  # fresh noise (25 uniform gray levels equal by chance: probability 256^-25)
         else:
             frozen += 1
-            assert not changed  # the patch stays frozen
+            assert not changed  # exact: the patch stays frozen (the same values, copied)
         o = o2
     assert pressed > 5 and frozen > 30
     assert len(np.unique(o[-1][PATCH])) > 5  # noise, not a flat patch
@@ -117,7 +117,7 @@ def test_simulator_imagines_the_tv() -> None:
     truth, *_ = clean.step(1)
     assert np.array_equal(_outside(nxt.obs[3][-1]), _outside(truth[-1]))  # exact: the no-op, the same renderer
     for i in range(3):
-        assert np.array_equal(nxt.obs[i][-1][PATCH], obs[-1][PATCH])  # frozen
+        assert np.array_equal(nxt.obs[i][-1][PATCH], obs[-1][PATCH])  # exact: frozen, a copy of the same values
     assert not np.array_equal(nxt.obs[3][-1][PATCH], obs[-1][PATCH])  # redrawn
 
 

@@ -51,8 +51,8 @@ def test_same_seed_same_metrics_and_killed_runs_resume_to_the_same_metrics(tmp_p
     monkeypatch.delenv("MALLOC_MMAP_THRESHOLD_")
     reference = metrics_without_wall_clock(first)
     assert len(reference) == 13  # header + steps 10..120
-    # exact: determinism (same config, seed and machine), as promised; where memory comes from changes no number
-    assert metrics_without_wall_clock(second) == reference
+    # where memory comes from changes no number: the second run left glibc's allocator at its defaults
+    assert metrics_without_wall_clock(second) == reference  # exact: determinism (same config, seed and machine)
 
     # Kill -9 after the rows of env steps 30, 70 and 100 are written (wherever the run is then), resume each time.
     env = {**os.environ, "PYTHONPATH": str(REPO)}
