@@ -36,7 +36,8 @@ def _value_at(run: pd.DataFrame, column: str, step: int) -> float:
     return float(logged[column].iloc[-1]) if len(logged) else math.nan
 
 
-def _fmt(x: float, spec: str = ".2f") -> str:
+def fmt(x: float, spec: str = ".2f") -> str:
+    """``x`` formatted with ``spec``, or – for NaN."""
     return "–" if math.isnan(x) else format(x, spec)
 
 
@@ -97,7 +98,7 @@ def to_markdown(table: pd.DataFrame, title: str, what: str, reference: str) -> s
              "|" + "---|" * len(head)]  # fmt: skip
     for r in table.itertuples(index=False):
         first = [str(r.step)] if step else [f"{r.stable} / {r.n}"]
-        cells = [r.env, r.row, *first, r.per_seed, f"{_fmt(r.mean)} ± {_fmt(r.se)}", _fmt(r.median), _fmt(r.welch_p, ".3g")]
+        cells = [r.env, r.row, *first, r.per_seed, f"{fmt(r.mean)} ± {fmt(r.se)}", fmt(r.median), fmt(r.welch_p, ".3g")]
         lines.append("| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |")
     return "\n".join(lines) + "\n"
 

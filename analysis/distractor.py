@@ -16,7 +16,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from analysis.claims import fmt
 from analysis.stats import mean_se, welch_p
+from analysis.tables import per_seed_text
 
 NONE = "none"
 NOTE = ("Steps-to-goal, lower is better; censored runs (`>cap`) counted at their last step; SE = sample SD (ddof = 1)"
@@ -56,17 +58,12 @@ def distractor_table(runs: pd.DataFrame) -> pd.DataFrame:
             rate, rate_se = mean_se(rates) if rates else (math.nan, math.nan)
             out.append({
                 "env": env, "method": method, "distractor": distractor, "n": len(d), "reached": int(d["reached"].sum()),
-                "per_seed": " ".join(f">{int(s)}" if c else str(int(s)) for s, c in zip(d["steps"], d["censored"],
-                                                                                        strict=True)),
+                "per_seed": per_seed_text(d),
                 "mean": mean, "se": se, "median": float(np.median(d["steps"])),
                 "welch_p": math.nan if distractor == NONE or not clean else welch_p(d["steps"].tolist(), clean),
                 "tv_rate": rate, "tv_rate_se": rate_se,
             })  # fmt: skip
     return pd.DataFrame(out)
-
-
-def _fmt(x: float, spec: str) -> str:
-    return "–" if math.isnan(x) else format(x, spec)
 
 
 def to_markdown(table: pd.DataFrame) -> str:
@@ -76,8 +73,8 @@ def to_markdown(table: pd.DataFrame) -> str:
              "|" + "---|" * len(head)]  # fmt: skip
     for r in table.itertuples(index=False):
         cells = [r.env, r.method, r.distractor, f"{r.reached} / {r.n}", r.per_seed,
-                 f"{_fmt(r.mean, '.1f')} ± {_fmt(r.se, '.1f')}", _fmt(r.median, ".1f"), _fmt(r.welch_p, ".3g"),
-                 "–" if math.isnan(r.tv_rate) else f"{r.tv_rate:.3f} ± {_fmt(r.tv_rate_se, '.3f')}"]  # fmt: skip
+                 f"{fmt(r.mean, '.1f')} ± {fmt(r.se, '.1f')}", fmt(r.median, ".1f"), fmt(r.welch_p, ".3g"),
+                 "–" if math.isnan(r.tv_rate) else f"{r.tv_rate:.3f} ± {fmt(r.tv_rate_se, '.3f')}"]  # fmt: skip
         lines.append("| " + " | ".join(str(c) for c in cells) + " |")
     return "\n".join(lines) + "\n"
 

@@ -24,7 +24,6 @@ import yaml
 from analysis import claims
 from analysis.cli import Options, parser, run
 from analysis.collect import load_incomplete
-from analysis.distractor import write_distractor_table
 from analysis.rows import label_rows, load_runs, pool_rows
 from analysis.stats import iqm_ci, mean_se, welch_p
 
@@ -43,7 +42,8 @@ def paper_numbers(path: Path = PAPER_NUMBERS) -> list[dict]:
     return list(yaml.safe_load(path.read_text()))
 
 
-def _per_seed(g: pd.DataFrame) -> str:
+def per_seed_text(g: pd.DataFrame) -> str:
+    """Every run's steps-to-goal in ``g``'s order, a censored run as ``>last``."""
     return " ".join(f">{int(s)}" if c else str(int(s)) for s, c in zip(g["steps"], g["censored"], strict=True))
 
 
@@ -73,7 +73,7 @@ def steps_table(runs: pd.DataFrame, reference: str = DEFAULT_REFERENCE, numbers:
         point, low, high = iqm_ci(strata)
         is_ref = fnmatch.fnmatchcase(row, reference)
         out.append({
-            "env": env, "row": row, "seeds": len(g), "reached": int((~g["censored"]).sum()), "per_seed": _per_seed(g),
+            "env": env, "row": row, "seeds": len(g), "reached": int((~g["censored"]).sum()), "per_seed": per_seed_text(g),
             "mean": mean, "se": se, "mean_success": mean_s, "se_success": se_s, "median": float(g["steps"].median()),
             "iqm": point, "iqm_low": low, "iqm_high": high,
             "welch_p": math.nan if is_ref or ref.empty else welch_p(g["steps"], ref["steps"]),
@@ -166,6 +166,8 @@ def write_tables(root: Path, out: Path, reference: str = DEFAULT_REFERENCE, grou
     incomplete.reindex(columns=cols).to_csv(out / "incomplete.csv", index=False, lineterminator="\n")
     if not runs.empty:
         write_curve_tables(root, out, reference, group_by, pools)
+        from analysis.distractor import write_distractor_table  # it imports this module's per-seed text
+
         write_distractor_table(runs, out)
     return table
 

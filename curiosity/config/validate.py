@@ -187,7 +187,7 @@ def _pairing_errors(cfg: DictConfig) -> list[str]:
 
 def _distractor_errors(cfg: DictConfig) -> list[str]:
     """A noisy TV shows in frames (pixels only), inside the frame; its remote control needs the env's no-op."""
-    distractor = str(choice(cfg.env.get("distractor", "none")))
+    distractor = choice(cfg.env.get("distractor", "none"))
     if distractor == "none":
         return []
     label = f"env.distractor={distractor}"

@@ -23,7 +23,6 @@ import numpy as np
 
 from curiosity.envs.wrappers import normalise_pixels
 
-DISTRACTORS = ("none", "noisy_tv", "noisy_tv_background")
 REMOTE = "noisy_tv"
 _STREAM = 0x7E1E  # the TV generator's stream, apart from any other generator seeded with the run's seed
 

@@ -43,7 +43,7 @@ _RENDERERS: dict[str, Callable[[Any, int], gym.Env]] = {"gym": _gym_frames, "fas
 
 def distractor_of(cfg: Any) -> str:
     """The ``env`` node's ``distractor`` (``none`` for runs saved before it existed)."""
-    return str(choice(cfg.get("distractor", "none")))
+    return choice(cfg.get("distractor", "none"))
 
 
 def _frames(cfg: Any, max_steps: int) -> gym.Env:

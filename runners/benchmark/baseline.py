@@ -18,6 +18,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+from curiosity.runtime.allocator import MMAP_THRESHOLD
+
 REPO = Path(__file__).resolve().parents[2]
 
 # uses only APIs every commit of the project has had: compose_config, build, make_env, replay.add, agent._iteration;
@@ -60,7 +62,7 @@ print(json.dumps(statistics.median(times)))
 
 
 # The same fixed thresholds for both trees (what keep_freed_memory sets; an environment's setting takes precedence).
-SAME_ALLOCATOR = {"MALLOC_MMAP_THRESHOLD_": str(32 * 2**20), "MALLOC_TRIM_THRESHOLD_": str(64 * 2**20)}
+SAME_ALLOCATOR = {"MALLOC_MMAP_THRESHOLD_": str(MMAP_THRESHOLD), "MALLOC_TRIM_THRESHOLD_": str(2 * MMAP_THRESHOLD)}
 
 
 def _iteration_ms(tree: Path, batch: int, repeats: int, threads: int, extra_env: dict[str, str]) -> float:
