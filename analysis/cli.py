@@ -1,7 +1,7 @@
 """The command line every analysis command shares: ``RUNS_DIR [--out DIR] [--group-by KEYS] [--pool LABEL=GLOB]``,
 and one clear error line (no traceback) for a missing directory, no runs or a malformed option. A results directory
-may hold ``analysis.yaml`` with the ``pool``, ``group_by`` and ``reference`` its tables were made with: the bare
-command then makes them again (an option on the command line wins)."""
+may hold ``analysis.yaml`` with the ``pool``, ``group_by``, ``reference`` and ``include`` its tables were made with
+(:mod:`analysis.settings`): the bare command then makes them again (an option on the command line wins)."""
 
 from __future__ import annotations
 
@@ -11,12 +11,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-import yaml
-
 from analysis.collect import existing_roots
-
-SETTINGS = "analysis.yaml"  # in RUNS_DIR: how its tables are made (pool, group_by, reference), so the bare command does
-SETTING_KEYS = ("pool", "group_by", "reference")
+from analysis.settings import settings
 
 
 @dataclass
@@ -41,19 +37,6 @@ def parser(description: str) -> argparse.ArgumentParser:
                    help="merge the rows whose label matches GLOB into one row LABEL (repeatable); LABEL+=GLOB adds "
                         "the pooled row beside the rows it pools")  # fmt: skip
     return p
-
-
-def settings(root: Path) -> dict[str, object]:
-    """``RUNS_DIR/analysis.yaml``: the defaults of ``--pool`` (a list), ``--group-by`` (a list) and ``--reference`` that
-    the directory's committed tables were made with; {} without the file."""
-    path = root / SETTINGS
-    if not path.is_file():
-        return {}
-    found = yaml.safe_load(path.read_text()) or {}
-    if not isinstance(found, dict) or set(found) - set(SETTING_KEYS):
-        extra = sorted(set(found) - set(SETTING_KEYS)) if isinstance(found, dict) else found
-        raise ValueError(f"{path}: {extra} is not a setting; allowed: {', '.join(SETTING_KEYS)}")
-    return found
 
 
 def _apply(args: argparse.Namespace, found: dict[str, object]) -> None:

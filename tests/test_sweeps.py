@@ -23,7 +23,7 @@ PRESETS = {
                {"+experiment": ["ours", "paper_text_renyi", "paper_text_renyi_mi", "nsrs", "icm", "rnd", "random"]}, 10),
     "fig6": ("results/fig6", "acrobot", {"entropy": ["gaussian_potential", "renyi", "renyi_mi", "none"]}, 6),
     "fig7": ("results/fig7", "acrobot", {"estimator": ["kde", "knn"]}, 6),
-    "hybrid": ("results/hybrid", "acrobot", {"intrinsic.alpha": ["0.0", "0.5", "1.0"]}, 6),
+    "hybrid": ("results/hybrid", "acrobot", {"+experiment": ["ours_density", "ours_hybrid", "ours_pe"]}, 6),
     "noisy_tv": ("results/noisy_tv", "acrobot", {"+experiment": ["icm", "rnd", "ours_pe", "ours_density", "ours_hybrid"],
                                                 "env.distractor": ["none", "noisy_tv"]}, 8),
 }

@@ -1,0 +1,110 @@
+"""``include`` in a results directory's ``analysis.yaml`` (``analysis.include``): runs another preset made with the same
+config count in this directory's tables, a run of its own wins over an included run of the same config and seed, and a
+bad setting is one line."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from analysis.collect import run_dirs
+from analysis.rows import label_rows, load_runs
+from tests.synthetic_runs import make_run
+from tests.test_analysis import analysis
+
+
+def _lender(root: Path) -> Path:
+    """Another preset's directory: random seeds 0-3 (steps 1000 + 100 seed) and nsrs seeds 0-1."""
+    for seed in range(4):
+        make_run(root / "table", "acrobot", "random", seed, 1000 + 100 * seed, behaviour=False)
+    for seed in range(2):
+        make_run(root / "table", "acrobot", "nsrs", seed, 500 + seed)
+    return root / "table"
+
+
+def _rows(directory: Path) -> dict[str, list[float]]:
+    runs = label_rows(load_runs(directory)).sort_values("seed")
+    return {row: g["steps"].tolist() for row, g in runs.groupby("row")}
+
+
+def test_included_runs_join_the_rows_of_the_directory(tmp_path: Path) -> None:
+    lender = _lender(tmp_path)
+    fig = tmp_path / "fig"
+    make_run(fig, "acrobot", "knn", 0, 700, estimator="knn")
+    (fig / "analysis.yaml").write_text("include: ['../table/acrobot/random/h3/seed=[0-2]']\n")
+    assert _rows(fig) == {"knn": [700.0], "random": [1000.0, 1100.0, 1200.0]}  # seeds 0-2 only: the glob decides
+    included = run_dirs(fig)[1:]
+    assert included == [lender / "acrobot" / "random" / "h3" / f"seed={s}" for s in range(3)]  # normalised paths
+    res = analysis("tables", fig, "--reference", "random")
+    assert res.returncode == 0, res.stderr
+    table = pd.read_csv(fig / "report" / "steps_to_goal.csv")
+    assert sorted(zip(table["row"], table["seeds"], strict=True)) == [("knn", 1), ("random", 3)]
+    assert not (lender / "report").exists()  # the lender's directory is read, never written
+
+
+def test_a_run_of_the_directory_wins_over_an_included_run_of_the_same_config_and_seed(tmp_path: Path) -> None:
+    _lender(tmp_path)
+    fig = tmp_path / "fig"
+    make_run(fig, "acrobot", "random", 1, 1111, behaviour=False)  # the same config and seed as the lender's seed 1
+    make_run(fig, "acrobot", "random", 2, 2222, behaviour=False, horizon=5)  # seed 2 with another config: not the same
+    (fig / "analysis.yaml").write_text("include: ['../table/acrobot/random/h3/seed=*']\n")
+    assert _rows(fig) == {"random [planner.horizon=3]": [1000.0, 1111.0, 1200.0, 1300.0],
+                          "random [planner.horizon=5]": [2222.0]}  # fmt: skip
+
+
+@pytest.mark.parametrize(("setting", "message"), [
+    ("include: ['../table/acrobot/rnd/*/seed=*']\n", "matches no finished run directory"),
+    ("include: '../table/acrobot/random/h3/seed=0'\n", "is not allowed; allowed: a list of globs"),
+    ("include: [3]\n", "is not allowed; allowed: a list of globs"),
+])  # fmt: skip
+def test_a_bad_include_is_one_line(tmp_path: Path, setting: str, message: str) -> None:
+    _lender(tmp_path)
+    fig = tmp_path / "fig"
+    make_run(fig, "acrobot", "knn", 0, 700, estimator="knn")
+    (fig / "analysis.yaml").write_text(setting)
+    res = analysis("tables", fig)
+    assert res.returncode == 1 and res.stderr.count("\n") == 1 and message in res.stderr, res.stderr
+    assert "include" in res.stderr and not (fig / "report").exists()
+
+
+def test_the_committed_presets_include_only_runs_of_the_same_config(tmp_path: Path) -> None:
+    """Every committed ``include`` glob names runs whose config is the one the preset's own sweep would run: Figure 6's
+    and 7's default arm is Table 1's default agent, the hybrid rows are the noisy-TV rows without the TV, and the noisy-TV
+    test's ICM and RND without the TV are Table 1's rows. Each committed run a glob matches has the config (bookkeeping
+    keys aside) of the preset's job on its seed."""
+    from omegaconf import OmegaConf
+
+    from analysis.rows import IGNORED, flat_config
+    from analysis.settings import settings
+    from curiosity.config.compose import compose_config
+
+    results = Path(__file__).resolve().parents[1] / "results"
+    expected = {
+        "fig6": [["+sweep=fig6", "entropy=gaussian_potential"]], "fig7": [["+sweep=fig7", "estimator=kde"]],
+        "hybrid": [["+sweep=hybrid", f"+experiment={e}"] for e in ("ours_density", "ours_hybrid", "ours_pe")],
+        "noisy_tv": [["+sweep=noisy_tv", f"+experiment={e}", "env.distractor=none"] for e in ("icm", "rnd")],
+    }  # fmt: skip
+
+    def identity(run_dir: Path) -> dict[str, object]:
+        return {k: v for k, v in flat_config(run_dir).items() if k not in IGNORED}
+
+    checked = 0
+    for preset, jobs in expected.items():
+        patterns = settings(results / preset)["include"]
+        assert len(patterns) == len(jobs), preset
+        for pattern, job in zip(patterns, jobs, strict=True):
+            lent = pattern.split("/")  # ../<preset>/<env>/<method label>/<overrides>/seed=<glob>
+            cfg = compose_config(job)
+            assert lent[0] == ".." and lent[2] == cfg.env.name and lent[3] == cfg.method_label, pattern
+            for run_dir in sorted((results / preset).glob(pattern)):
+                if not (run_dir / "summary.json").exists():
+                    continue
+                seed = int(run_dir.name.removeprefix("seed="))
+                made = tmp_path / preset / lent[3] / run_dir.name
+                (made / ".hydra").mkdir(parents=True)
+                OmegaConf.save(compose_config([*job, f"seed={seed}"]), made / ".hydra" / "config.yaml")
+                assert identity(run_dir) == identity(made), run_dir
+                checked += 1
+    assert checked >= 6  # Table 1's default agent on seeds 100-105 at least (Figures 6 and 7)
