@@ -1,9 +1,9 @@
 """Runs one results directory lends another: the ``include`` setting of ``RUNS_DIR/analysis.yaml``.
 
-Two presets often share a configuration: Figure 7's KDE arm is Table 1's default agent on the same seeds, and the
-hybrid claim's three rows are the noisy-TV test's rows without the TV. ``include`` lists globs (relative to RUNS_DIR)
-of finished run directories made elsewhere; the analysis reads them as if they were below RUNS_DIR, so each such run is
-made once and counted in every table that needs it. A run below RUNS_DIR wins over an included run of the same
+Two presets often share a configuration: Figure 6's Gaussian-potential arm is Table 1's default agent on the same
+seeds, and the hybrid claim's three rows are the noisy-TV test's rows without the TV. ``include`` lists globs (relative
+to RUNS_DIR) of finished run directories made elsewhere; the analysis reads them as if they were below RUNS_DIR, so
+each such run is made once and counted in every table that needs it. A run below RUNS_DIR wins over an included run of the same
 configuration and seed (re-running the preset there replaces nothing and counts nothing twice). An included directory's
 own ``include`` is not followed.
 """

@@ -71,7 +71,7 @@ def test_a_bad_include_is_one_line(tmp_path: Path, setting: str, message: str) -
 
 def test_the_committed_presets_include_only_runs_of_the_same_config(tmp_path: Path) -> None:
     """Every committed ``include`` glob names runs whose config is the one the preset's own sweep would run: Figure 6's
-    and 7's default arm is Table 1's default agent, the hybrid rows are the noisy-TV rows without the TV, and the noisy-TV
+    default arm is Table 1's default agent, the hybrid rows are the noisy-TV rows without the TV, and the noisy-TV
     test's ICM and RND without the TV are Table 1's rows. Each committed run a glob matches has the config (bookkeeping
     keys aside) of the preset's job on its seed."""
     from omegaconf import OmegaConf
@@ -82,7 +82,7 @@ def test_the_committed_presets_include_only_runs_of_the_same_config(tmp_path: Pa
 
     results = Path(__file__).resolve().parents[1] / "results"
     expected = {
-        "fig6": [["+sweep=fig6", "entropy=gaussian_potential"]], "fig7": [["+sweep=fig7", "estimator=kde"]],
+        "fig6": [["+sweep=fig6", "entropy=gaussian_potential"]],
         "hybrid": [["+sweep=hybrid", f"+experiment={e}"] for e in ("ours_density", "ours_hybrid", "ours_pe")],
         "noisy_tv": [["+sweep=noisy_tv", f"+experiment={e}", "env.distractor=none"] for e in ("icm", "rnd")],
     }  # fmt: skip
@@ -107,4 +107,4 @@ def test_the_committed_presets_include_only_runs_of_the_same_config(tmp_path: Pa
                 OmegaConf.save(compose_config([*job, f"seed={seed}"]), made / ".hydra" / "config.yaml")
                 assert identity(run_dir) == identity(made), run_dir
                 checked += 1
-    assert checked >= 6  # Table 1's default agent on seeds 100-105 at least (Figures 6 and 7)
+    assert checked >= 6  # Table 1's default agent on seeds 100-105 at least (Figure 6)

@@ -9,6 +9,7 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+import pandas as pd
 import pytest
 from gymnasium.utils.env_checker import check_env
 
@@ -141,6 +142,39 @@ def test_a_termination_that_is_not_the_goal_resets_the_env_and_the_run_goes_on(t
     assert summary.env_steps == 300 and not summary.reached_goal
     assert json.loads((tmp_path / "summary.json").read_text())["episode_resets"] == summary.episode_resets
     assert (cfg.env.n_actions, cfg.env.state_dim) == (3, 1)  # from the env's own spaces
+
+
+class NearGoalCorridor(FallingCorridor):
+    """The falling corridor started 5 cells from the goal: a random policy reaches it every few hundred steps."""
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
+        super().reset(seed=seed)
+        self.state = np.array([35.0])
+        return self.state.astype(np.float32) / 40, {}
+
+
+if "tests/NearGoalCorridor-v0" not in gym.registry:
+    gym.register(id="tests/NearGoalCorridor-v0", entry_point=NearGoalCorridor)
+
+
+def test_a_run_that_goes_on_past_the_goal_counts_the_first_and_ends_at_the_cap(tmp_path: Path) -> None:
+    """``budget.stop_at_goal=false`` (Figure 7's fixed-length curves): the goal resets the env and the run goes on; up
+    to the first goal it is the run that stops there (same seed and machine: the same actions and rows)."""
+    base = ["env=chain", "encoder=mlp", "env.id=tests/NearGoalCorridor-v0", "baseline=random", "progress=false",
+            "env._target_=tests.test_envs.FallingCorridorAdapter", "env.coverage_low=[-0.5]",
+            "env.coverage_high=[40.5]", "env.coverage_bins=[41]", "budget=smoke", "budget.max_steps=1000"]  # fmt: skip
+    stops = run(compose_cfg(base), tmp_path / "stops")
+    goes_on = run(compose_cfg([*base, "budget.stop_at_goal=false"]), tmp_path / "goes_on")
+    assert stops.reached_goal and stops.goals == 1 and stops.env_steps == stops.steps_to_goal < 1000
+    assert goes_on.steps_to_goal == stops.steps_to_goal and goes_on.env_steps == 1000
+    assert goes_on.goals >= 2 and goes_on.episode_resets >= goes_on.goals, goes_on
+    assert json.loads((tmp_path / "goes_on" / "summary.json").read_text())["goals"] == goes_on.goals
+    clock = ["charts/wall_time", "charts/sps"]
+    a = pd.read_csv(tmp_path / "stops" / "metrics.csv").drop(columns=clock)
+    b = pd.read_csv(tmp_path / "goes_on" / "metrics.csv").drop(columns=clock)
+    assert len(b) > len(a) and b["step"].iloc[-1] == 1000
+    before_goal = (a.iloc[:-1], b.iloc[: len(a) - 1])  # the stopping run's last row is the goal step
+    pd.testing.assert_frame_equal(*before_goal, check_exact=True)  # exact: same seed and machine, the same steps
 
 
 def test_actions_and_state_size_come_from_the_envs_spaces() -> None:

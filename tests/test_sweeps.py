@@ -55,6 +55,7 @@ def test_a_preset_sweeps_its_rows_over_held_out_seeds_and_every_job_validates(pr
         job = [f"+sweep={preset}", *(f"{k}={v}" for k, v in zip(rows, values, strict=True))]
         _, task = checked_config(job)  # composes, appends no unknown key, validates
         assert task.env.name == env and task.budget.max_steps == 3000 and task.budget.warmup_steps == 64
+        assert task.budget.stop_at_goal == (preset != "fig7")  # Figure 7's reward curves go on to the cap
         labels.add((task.method_label, repr(values)))
     assert len({label for label, _ in labels}) == len(labels) or preset != "table1"  # Table 1's rows: one label each
 

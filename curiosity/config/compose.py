@@ -112,6 +112,7 @@ LEGACY: dict[str, Any] = {
     "env.tv.size": 5,
     "env.tv.row": 0,
     "env.tv.col": 0,
+    "budget.stop_at_goal": True,
 }
 
 

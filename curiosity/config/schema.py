@@ -350,6 +350,7 @@ class QAgentConfig(AgentConfig):
 class BudgetConfig:
     name: str = MISSING
     max_steps: int = 3000  # env-step cap of the one continuing episode
+    stop_at_goal: bool = True  # false: the goal resets the env and the run goes on to max_steps (Figure 7's curves)
     warmup_steps: int = 64  # uniformly random steps first (they count towards steps-to-goal)
     train_every: int = 1  # env steps between training calls
     iters_per_train: int = 16  # gradient iterations per training call

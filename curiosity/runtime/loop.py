@@ -147,7 +147,7 @@ class _Run:
                                           tv.tv_action if tv is not None else None)  # fmt: skip
         self.coverage = GridCoverage(cfg.env.coverage_low, cfg.env.coverage_high, cfg.env.coverage_bins)
         self.rng = np.random.default_rng(cfg.seed)
-        self.step, self.steps_to_goal, self.wall_before, self.resets = 0, None, 0.0, 0
+        self.step, self.steps_to_goal, self.wall_before, self.resets, self.goals = 0, None, 0.0, 0, 0
         self.stop_signal: int | None = None
         self._start: float | None = None  # perf_counter at the start of execute()
         columns = [*CHART_KEYS, *self.behaviour.keys, *self.agent.metric_keys]
@@ -164,6 +164,7 @@ class _Run:
     def _restore(self, ckpt: dict[str, Any], columns: list[str]) -> None:
         restore_env(self.env, ckpt["env"], self.cfg.seed, self.adapter)
         self.resets = int(ckpt.get("resets", 0))
+        self.goals = int(ckpt.get("goals", ckpt["steps_to_goal"] is not None))  # a checkpoint made before the count
         self.agent.load_state_dict(ckpt["agent"])
         self.coverage.load_state_dict(ckpt["coverage"])
         self.behaviour.load_state_dict(ckpt["behaviour"])
@@ -179,6 +180,7 @@ class _Run:
         save_checkpoint(self.run_dir, {
             "config": identity(self.cfg), "step": self.step, "finished": finished, "obs": self.obs,
             "steps_to_goal": self.steps_to_goal, "env": env_state(self.env, self.adapter), "resets": self.resets,
+            "goals": self.goals,
             "agent": self.agent.state_dict(),
             "coverage": self.coverage.state_dict(), "behaviour": self.behaviour.state_dict(),
             "loop_rng": self.rng.bit_generator.state, "rng": rng_states(), "logger": self.logger.state_dict(),
@@ -216,15 +218,16 @@ class _Run:
         bar = tqdm(total=budget.max_steps, initial=self.step, unit="step", desc=f"{cfg.method_label} seed={cfg.seed}",
                    disable=not cfg.progress)  # fmt: skip
         try:
-            while self.step < budget.max_steps and self.steps_to_goal is None:
+            while self.step < budget.max_steps and (self.steps_to_goal is None or not budget.stop_at_goal):
                 try:
                     goal = self._step()
                 except NumericalFault as fault:  # stop; keep the last good checkpoint; no NaN row was written
                     raise NumericalFault(fault.term, fault.value, self.step + 1) from None
                 self.step += 1
                 if goal:
-                    self.steps_to_goal = self.step
-                done = goal or self.step == budget.max_steps
+                    self.goals += 1
+                    self.steps_to_goal = self.steps_to_goal or self.step  # the first time counts
+                done = (goal and budget.stop_at_goal) or self.step == budget.max_steps
                 if self.step % cfg.log_every == 0 or done:
                     self._dump()
                     bar.set_postfix(coverage=f"{self.coverage.fraction:.4f}", refresh=False)
@@ -241,7 +244,8 @@ class _Run:
         """One env step (``self.step`` is its 0-based index); returns whether it reached the goal.
 
         A termination that is not the goal (the adapter's predicate) is a terminal transition for the agent; the env
-        is then reset and the run goes on from the new episode's first observation."""
+        is then reset and the run goes on from the new episode's first observation. So is the goal itself when the run
+        goes on past it (``budget.stop_at_goal=false``)."""
         step = self.step
         if step < self.cfg.budget.warmup_steps:
             action = int(self.rng.integers(self.env.action_space.n))
@@ -254,7 +258,7 @@ class _Run:
         self.logger.record("charts/extrinsic_reward", float(reward))
         self.coverage.update(self.adapter.physical_state(self.env))
         self.obs = next_obs
-        if terminated and not goal:
+        if terminated and (not goal or not self.cfg.budget.stop_at_goal):
             self.obs, _ = self.env.reset()
             self.resets += 1
             self.coverage.update(self.adapter.physical_state(self.env))
@@ -276,5 +280,5 @@ class _Run:
             warmup_steps=budget.warmup_steps, final_coverage=self.coverage.fraction, wall_seconds=wall,
             steps_per_second=self.step / max(wall, 1e-9), git_commit=commit, git_dirty=dirty,
             planner_sampled_candidates=sampled_candidates(self.cfg),
-            behaviour=self.behaviour.summary(), agent=self.agent.summary(), episode_resets=self.resets,
+            behaviour=self.behaviour.summary(), agent=self.agent.summary(), episode_resets=self.resets, goals=self.goals,
         )  # fmt: skip

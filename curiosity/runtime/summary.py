@@ -32,8 +32,10 @@ class RunSummary:
     goal; it is ``None`` when the goal was not reached within ``max_steps`` (a censored run).
     ``planner_sampled_candidates`` is the number of action sequences the MPC planner sampled per step when it could
     not score all of them (``planner.sample_candidates=true``); ``None`` when it scored every one. ``behaviour`` and
-    ``agent`` are absent from runs made before they existed. ``episode_resets`` counts the terminations that were not the
-    goal (none on Acrobot and MountainCar, whose only termination is the goal).
+    ``agent`` are absent from runs made before they existed. ``episode_resets`` counts the env resets: terminations that
+    were not the goal (none on Acrobot and MountainCar, whose only termination is the goal) and, when the run goes on
+    past the goal (``budget.stop_at_goal=false``), the goals. ``goals`` counts the times the goal was reached (absent
+    from runs made before it existed); ``steps_to_goal`` is always the first.
     """
 
     method: str
@@ -52,7 +54,8 @@ class RunSummary:
     planner_sampled_candidates: int | None = None
     behaviour: dict[str, Any] | None = None  # BehaviourTracker.summary(): action frequencies, repeat and directed rates
     agent: dict[str, Any] = field(default_factory=dict)  # the agent's own run totals (Agent.summary())
-    episode_resets: int = 0  # terminations that were not the goal (the env was reset and the run went on)
+    episode_resets: int = 0  # env resets: non-goal terminations, and goals when the run goes on past them
+    goals: int | None = None  # times the goal was reached (None: a run made before the field existed)
 
     def write(self, run_dir: str | Path) -> Path:
         """Write ``summary.json`` atomically (temporary file + rename)."""
