@@ -38,9 +38,10 @@ def test_the_committed_report_tables_are_what_the_command_writes(tmp_path) -> No
         assert (tmp_path / name).read_bytes() == (committed / name).read_bytes(), name  # exact: text of the same numbers
 
 
-PRESETS = ("table1", "table2", "fig6", "fig7", "hybrid")  # issue 15's claims: results/<preset>/ (conf/sweep/)
+# issue 15's claims and issue 16's test: results/<preset>/ (conf/sweep/)
+PRESETS = ("table1", "table2", "fig6", "fig7", "hybrid", "noisy_tv")
 TABLES = ("steps_to_goal.md", "steps_to_goal.tex", "steps_to_goal.csv", "incomplete.csv", "spread.md", "spread.csv",
-          "stable_step.md", "stable_step.csv")  # fmt: skip
+          "stable_step.md", "stable_step.csv", "distractor.md", "distractor.csv")  # fmt: skip
 
 
 def test_every_claims_table_committed_is_what_the_bare_command_writes(tmp_path) -> None:
@@ -60,3 +61,12 @@ def test_every_claims_table_committed_is_what_the_bare_command_writes(tmp_path) 
             assert (out / name).read_bytes() == (committed / name).read_bytes(), f"{preset}/{name}"  # exact: same text
         checked += 1
     assert checked >= 1  # results/table1 is committed
+
+
+def test_the_committed_verdicts_are_what_the_command_writes(tmp_path) -> None:
+    """``python -m analysis.verdicts results`` (the README's "Does the paper hold?") rewrites ``results/verdicts.*``
+    byte for byte from the committed tables."""
+    res = analysis("verdicts", "results", "--out", tmp_path)
+    assert res.returncode == 0, res.stderr
+    for name in ("verdicts.md", "verdicts.csv"):
+        assert (tmp_path / name).read_bytes() == (REPO / "results" / name).read_bytes(), name  # exact: same text

@@ -1,0 +1,85 @@
+"""``analysis.verdicts``: the fixed rule that turns the committed tables into one verdict per paper claim, on samples
+with known outcomes and on tables the analysis writes from synthetic runs."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from scipy import stats
+
+from analysis.tables import write_tables
+from analysis.verdicts import (CLAIMS, NOT_SUPPORTED, OURS, PENDING, REVERSED, SUPPORTED, claim_verdict, judge,
+                               seed_values, verdicts)  # fmt: skip
+from tests.synthetic_runs import make_run
+from tests.test_analysis import analysis
+
+FAST = [300.0, 320, 280, 310, 290, 305, 295, 315, 285, 300]
+SLOW = [900.0, 950, 870, 910, 890, 905, 930, 880, 940, 920]
+NOISY = [100.0, 600, 150, 550, 200, 500, 250, 450, 300, 400]  # mean 350: not told apart from FAST
+
+
+@pytest.mark.parametrize(("relation", "a", "b", "expected"), [
+    ("<", FAST, SLOW, SUPPORTED), ("<", SLOW, FAST, REVERSED), ("<", FAST, NOISY, NOT_SUPPORTED),
+    (">", SLOW, FAST, SUPPORTED), (">", FAST, SLOW, REVERSED),
+    ("≈", FAST, NOISY, SUPPORTED), ("≈", FAST, SLOW, NOT_SUPPORTED),
+    ("≮", SLOW, FAST, SUPPORTED), ("≮", FAST, NOISY, SUPPORTED), ("≮", FAST, SLOW, REVERSED),
+])  # fmt: skip
+def test_each_relation_follows_the_rule(relation: str, a: list[float], b: list[float], expected: str) -> None:
+    verdict, p = judge(relation, a, b)
+    assert verdict == expected
+    assert p == pytest.approx(stats.ttest_ind(a, b, equal_var=False).pvalue, rel=1e-12)
+
+
+def test_a_claim_is_supported_only_when_every_comparison_is() -> None:
+    assert claim_verdict([SUPPORTED, SUPPORTED]) == SUPPORTED
+    assert claim_verdict([SUPPORTED, NOT_SUPPORTED]) == NOT_SUPPORTED
+    assert claim_verdict([SUPPORTED, REVERSED]) == REVERSED
+    assert claim_verdict([REVERSED, PENDING]) == PENDING  # no verdict from an unfinished table
+
+
+def test_per_seed_text_reads_censored_runs_at_their_last_step() -> None:
+    assert seed_values("857 368 >3000") == [857.0, 368.0, 3000.0]
+    assert seed_values("0.17 -12.64") == [0.17, -12.64]
+
+
+def _table1(root: Path, nsrs_seeds: int = 10) -> Path:
+    """results/table1 from synthetic runs: ours fast, NSRS slower, ICM and RND alike and slowest."""
+    runs = root / "table1"
+    for seed in range(10):
+        make_run(runs, "acrobot", OURS, seed, int(FAST[seed]))
+        make_run(runs, "acrobot", "icm", seed, int(NOISY[seed]) + 1000)
+        make_run(runs, "acrobot", "rnd", seed, int(NOISY[::-1][seed]) + 1050)
+    for seed in range(nsrs_seeds):
+        make_run(runs, "acrobot", "nsrs", seed, int(SLOW[seed]) - 300)
+    write_tables(runs, runs / "report", reference="nsrs*")
+    return root
+
+
+def test_table_1_from_the_tables_the_analysis_writes(tmp_path: Path) -> None:
+    table = verdicts(_table1(tmp_path)).set_index(["claim", "relation", "b"])
+    assert list(table.loc["Table 1"]["verdict"]) == [SUPPORTED, SUPPORTED, SUPPORTED]
+    assert set(table.loc["Table 1"]["claim_verdict"]) == {SUPPORTED}
+    ours = table.loc[("Table 1", "<", "nsrs*")]
+    steps = pd.read_csv(tmp_path / "table1" / "report" / "steps_to_goal.csv").set_index("row")
+    assert ours.a_mean == steps.loc[OURS, "mean"] and ours.a_n == 10  # the table's own numbers
+    assert ours.welch_p == pytest.approx(steps.loc[OURS, "welch_p"], rel=1e-6)  # the table's test against NSRS
+    assert set(table.drop(index="Table 1")["verdict"]) == {PENDING}  # the other presets have no tables
+
+
+def test_a_row_short_of_its_seeds_or_a_missing_row_leaves_the_claim_pending(tmp_path: Path) -> None:
+    table = verdicts(_table1(tmp_path, nsrs_seeds=9)).set_index(["claim", "relation", "b"])
+    assert table.loc[("Table 1", "<", "nsrs*")].why == "nsrs: 9 of 10 seeds"
+    assert set(table.loc["Table 1"]["claim_verdict"]) == {PENDING}
+    assert {c.name for c in CLAIMS} == set(table.index.get_level_values("claim"))
+
+
+def test_the_command_writes_the_verdicts_and_refuses_a_missing_directory(tmp_path: Path) -> None:
+    root = _table1(tmp_path)
+    res = analysis("verdicts", root)
+    assert res.returncode == 0, res.stderr
+    text = (root / "verdicts.md").read_text()
+    assert "**Table 1: supported**" in text and "**Table 2: pending**" in text
+    bad = analysis("verdicts", tmp_path / "nowhere")
+    assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "no such directory" in bad.stderr
