@@ -3,9 +3,9 @@
 Two presets often share a configuration: Figure 6's Gaussian-potential arm is Table 1's default agent on the same
 seeds, and the hybrid claim's three rows are the noisy-TV test's rows without the TV. ``include`` lists globs (relative
 to RUNS_DIR) of finished run directories made elsewhere; the analysis reads them as if they were below RUNS_DIR, so
-each such run is made once and counted in every table that needs it. A run below RUNS_DIR wins over an included run of the same
-configuration and seed (re-running the preset there replaces nothing and counts nothing twice). An included directory's
-own ``include`` is not followed.
+each such run is made once and counted in every table that needs it. A run below RUNS_DIR wins over an included run of
+the same configuration and seed (re-running the preset there replaces nothing and counts nothing twice). An included
+directory's own ``include`` is not followed.
 """
 
 from __future__ import annotations

@@ -148,8 +148,8 @@ def compare(results: Path, claim: Claim, c: Comparison) -> dict[str, object]:
     a, b = (seed_values(r["per_seed"]) for r in rows)  # type: ignore[index]
     short = [f"{r['row']}: {len(v)} of {n} seeds" for r, v, n in zip(rows, (a, b), (c.seeds, c.seeds_b or c.seeds),
                                                                        strict=True) if len(v) != n]  # fmt: skip
-    if _unfinished(report):
-        short.append(f"{_unfinished(report)} unfinished run(s) in {claim.preset}")
+    if unfinished := _unfinished(report):
+        short.append(f"{unfinished} unfinished run(s) in {claim.preset}")
     verdict, p = judge(c.relation, a, b)
     for key, r, v in (("a", rows[0], a), ("b", rows[1], b)):  # the table's own mean and SE, printed as it has them
         out |= {f"{key}_row": r["row"], f"{key}_n": len(v), f"{key}_mean": r["mean"], f"{key}_se": r["se"]}  # type: ignore[index]
