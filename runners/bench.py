@@ -42,6 +42,8 @@ def parse(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--reservoir", type=int, default=4096,
                    help="also measure planning, refresh and log rho error with memory_mode=reservoir of this size at the "
                         "memory sizes above it (0: skip)")
+    p.add_argument("--reservoir-precision", default="float32", choices=("float64", "float32"),
+                   help="the KDE arithmetic of the reservoir measurement (estimator.precision; the exact rows are float64)")
     p.add_argument("--baseline-commit", default=BASELINE_COMMIT, help="commit to time the training iteration against")
     p.add_argument("--seeds", type=int, nargs="*", help="seeds of the default agent to run alone (default 100-103)")
     p.add_argument("--seed-dir", help="where the seed runs go (default: a temporary directory); re-running resumes")
@@ -76,10 +78,11 @@ def measure(args: argparse.Namespace, seed_dir: Path) -> dict[str, Any]:
     res["train_iter_speedup_same_allocator"] = base["speedup_same_allocator"]
     res.update(_by_memory({n: planning_at(n, args.repeats) for n in args.memory}))
     size = args.reservoir
-    reservoir = ["intrinsic.terms.novelty.memory_mode=reservoir", f"intrinsic.terms.novelty.memory_size={size}"]
+    reservoir = ["intrinsic.terms.novelty.memory_mode=reservoir", f"intrinsic.terms.novelty.memory_size={size}",
+                 f"estimator.precision={args.reservoir_precision}"]  # fmt: skip
     sampled = {n: planning_at(n, args.repeats, overrides=reservoir)
                for n in args.memory if 0 < size < n}  # fmt: skip
-    res["reservoir"] = {"size": size, **_by_memory(sampled)}
+    res["reservoir"] = {"size": size, "precision": args.reservoir_precision, **_by_memory(sampled)}
     sweep = ["budget=smoke", "budget.max_steps=70"] if args.quick else ["budget=smoke"]
     res["sweep"] = sweep_speedup(sweep)
     res["sweep_speedup_2_jobs"] = res["sweep"]["speedup"]
@@ -114,8 +117,8 @@ def report(res: dict[str, Any]) -> str:
     r = res.get("reservoir", {})
     for n, ms in r.get("plan_step_ms", {}).items():
         e = r["novelty_log_rho_error"][n]
-        lines.append(f"| {n:,} (reservoir {r['size']:,}) | {ms:.1f} | {r['refresh_ms'][n]:.1f} | "
-                     f"{e['median']:.2g} / {e['p99']:.2g} |")
+        lines.append(f"| {n:,} (reservoir {r['size']:,}, {r.get('precision', 'float64')}) | {ms:.1f} | "
+                     f"{r['refresh_ms'][n]:.1f} | {e['median']:.2g} / {e['p99']:.2g} |")  # fmt: skip
     s = res["sweep"]
     lines += ["", f"{s['jobs']}-job sweep: {s['one_job_s']:.1f} s with 1 worker, {s['two_jobs_s']:.1f} s with 2: "
               f"speed-up {s['speedup']:.2f}x"]  # fmt: skip

@@ -100,7 +100,7 @@ def test_parse_defaults_and_report_render() -> None:
         "plan_step_ms": {1000: 3.0},
         "refresh_ms": {1000: 5.0},
         "novelty_log_rho_error": {1000: {"median": 0.0, "p99": 0.0}},
-        "reservoir": {"size": 500, "plan_step_ms": {1000: 2.0}, "refresh_ms": {1000: 4.0},
+        "reservoir": {"size": 500, "precision": "float32", "plan_step_ms": {1000: 2.0}, "refresh_ms": {1000: 4.0},
                       "novelty_log_rho_error": {1000: {"median": 0.1, "p99": 0.5}}},
         "sweep": {"jobs": 4, "one_job_s": 10.0, "two_jobs_s": 5.5, "speedup": 1.82},
         "seeds": [{"seed": 100, "steps_to_goal": 200, "wall_s": 100.0}],
@@ -109,7 +109,7 @@ def test_parse_defaults_and_report_render() -> None:
     text = report(res)
     assert "speed-up 2.50x" in text and "10.0 vs 15.0 ms: 1.50x" in text
     assert "| 100 | 200 | 100 |" in text and "train 50.0%" in text
-    assert "| 1,000 (reservoir 500) | 2.0 | 4.0 | 0.1 / 0.5 |" in text
+    assert "| 1,000 (reservoir 500, float32) | 2.0 | 4.0 | 0.1 / 0.5 |" in text
 
 
 def test_baseline_commit_is_timed_from_its_own_worktree_and_removed() -> None:

@@ -159,3 +159,22 @@ def test_reservoir_bandwidth_follows_the_whole_stream():
     h = full.reward.bandwidth
     assert 0.85 <= corrected.reward.bandwidth / h <= 1.15
     assert 1.6 <= plain.reward.bandwidth / h <= 2.0
+
+
+def test_estimator_precision_comes_from_the_config_and_reaches_every_kde() -> None:
+    """``estimator.precision=float32`` builds a KDE estimator whose rewards (queries and the random-phase baseline) use
+    float32 arithmetic: close to, not equal to, the float64 default's (float32 rounding; not bit-exact across
+    machines)."""
+    from curiosity.config import build
+    from curiosity.config.compose import compose_config
+
+    fast = build(compose_config(["estimator.precision=float32"]).estimator)
+    ref = build(compose_config([]).estimator)
+    assert (fast.reward.precision, ref.reward.precision) == ("float32", "float64")
+    data = torch.randn(600, 4, generator=torch.Generator().manual_seed(1), dtype=torch.float64)
+    query = data[:50] + 0.1 * torch.randn(50, 4, generator=torch.Generator().manual_seed(2), dtype=torch.float64)
+    for est in (fast, ref):
+        est.fit(data[100:], reference=data[:100])
+    assert fast.reward.log_rho0_bar.item() == pytest.approx(ref.reward.log_rho0_bar.item(), abs=1e-3)
+    diff = (fast(query) - ref(query)).abs()
+    assert 0 < diff.max().item() < 1e-3

@@ -51,19 +51,19 @@ def needs_grad(*xs: Tensor) -> bool:
 
 def sq_dist_chunks(q64: Tensor, row0: int, memory: Tensor, chunk_size: int, *, exclude_self: bool, inplace: bool,
                    min_size: int = 1) -> Iterator[Tensor]:  # fmt: skip
-    """Squared distances (b, stop − start) of float64 queries ``q64`` (b, d), the memory's rows row0 … row0 + b − 1
-    when ``exclude_self``, to each chunk of ``memory`` (:func:`chunks`); with ``exclude_self`` a query's own memory
-    row is at distance inf."""
+    """Squared distances (b, stop − start) of queries ``q64`` (b, d), the memory's rows row0 … row0 + b − 1 when
+    ``exclude_self``, to each chunk of ``memory`` (:func:`chunks`), computed in the queries' dtype (float64 unless a
+    caller asks for less); with ``exclude_self`` a query's own memory row is at distance inf."""
     q2 = q64.pow(2).sum(-1, keepdim=True)
     rows = torch.arange(row0, row0 + q64.shape[0], device=q64.device).unsqueeze(1)
     for start, stop in chunks(memory.shape[0], chunk_size, min_size=min_size):
-        d2 = sq_dists_chunk(q64, q2, memory[start:stop].to(torch.float64), inplace)
+        d2 = sq_dists_chunk(q64, q2, memory[start:stop].to(q64.dtype), inplace)
         if exclude_self:
             d2 = d2.masked_fill(rows == torch.arange(start, stop, device=q64.device).unsqueeze(0), math.inf)
         yield d2
 
 
 def sq_dists_chunk(q64: Tensor, q2: Tensor, m64: Tensor, inplace: bool) -> Tensor:
-    """||q_b - m_i||^2 = ||q||^2 + ||m||^2 - 2 q.m for float64 q (B, d), q2 = ||q||^2 (B, 1), m (M, d) -> (B, M) ≥ 0."""
+    """||q_b - m_i||^2 = ||q||^2 + ||m||^2 - 2 q.m for q (B, d), q2 = ||q||^2 (B, 1), m (M, d) of one dtype -> (B, M) ≥ 0."""
     d2 = torch.addmm(m64.pow(2).sum(-1).unsqueeze(0), q64, m64.T, alpha=-2.0)
     return d2.add_(q2).clamp_(min=0.0) if inplace else (d2 + q2).clamp(min=0.0)

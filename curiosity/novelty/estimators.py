@@ -52,14 +52,16 @@ class KDENovelty:
         bandwidth_rule: one of ``fixed``, ``median_nn``, ``scott``.
         standardise: standardise every dimension by the memory's mean and std before the KDE (the precursor's way).
         self_in_reference: count each memory point itself in the baseline statistics (sklearn's ``score_samples``).
+        precision: the KDE's arithmetic: ``float64`` (exact) or ``float32`` (faster, for big or sampled memories).
     """
 
     def __init__(self, bandwidth: float = 2.0, baseline: str = "scalar", bandwidth_rule: str = "median_nn",
-                 standardise: bool = False, self_in_reference: bool = False) -> None:  # fmt: skip
+                 standardise: bool = False, self_in_reference: bool = False, precision: str = "float64") -> None:  # fmt: skip
         if bandwidth_rule not in BANDWIDTH_RULES:
             raise ValueError(f"estimator.bandwidth_rule must be one of {BANDWIDTH_RULES}, got {bandwidth_rule!r}")
         self.multiplier, self.rule = float(bandwidth), bandwidth_rule
-        self.reward = KDENoveltyReward(bandwidth=float(bandwidth), baseline=baseline, self_in_reference=self_in_reference)
+        self.reward = KDENoveltyReward(bandwidth=float(bandwidth), baseline=baseline, self_in_reference=self_in_reference,
+                                       precision=precision)  # fmt: skip
         self.standardiser = _Standardiser(standardise)
 
     @property

@@ -14,7 +14,7 @@ import torch
 from torch import Tensor
 
 from curiosity.novelty._common import DEFAULT_CHUNK
-from curiosity.novelty.kde import kde_log_density
+from curiosity.novelty.kde import PRECISIONS, kde_log_density
 
 BASELINES = ("scalar", "pointwise", "printed", "zscore", "none")
 
@@ -80,6 +80,8 @@ class KDENoveltyReward:
         self_in_reference: see above.
         zscore_eps: floor on the memory's standard deviation in ``zscore`` mode.
         chunk_size: memory rows per KDE chunk.
+        precision: the KDE's arithmetic, ``"float64"`` (exact, the reference) or ``"float32"`` (about 1.6× faster,
+            ≈ 1e-4 nats off on standardised latents; see :func:`~curiosity.novelty.kde.kde_log_density`).
     """
 
     def __init__(
@@ -89,6 +91,7 @@ class KDENoveltyReward:
         self_in_reference: bool = False,
         zscore_eps: float = 1e-8,
         chunk_size: int = DEFAULT_CHUNK,
+        precision: str = "float64",
     ) -> None:
         if baseline not in BASELINES:
             raise ValueError(f"baseline must be one of {BASELINES}, got {baseline!r}")
@@ -99,6 +102,9 @@ class KDENoveltyReward:
         self.self_in_reference = bool(self_in_reference)
         self.zscore_eps = float(zscore_eps)
         self.chunk_size = int(chunk_size)
+        if precision not in PRECISIONS:
+            raise ValueError(f"precision must be one of {tuple(PRECISIONS)}, got {precision!r}")
+        self.precision = precision
         self.memory: Tensor | None = None
         self.reference: Tensor | None = None
         self.log_rho0_bar: Tensor | None = None
@@ -107,7 +113,8 @@ class KDENoveltyReward:
 
     def _self_log_density(self, emb: Tensor) -> Tensor:
         loo = not self.self_in_reference
-        return kde_log_density(emb, emb, bandwidth=self.bandwidth, exclude_self=loo, chunk_size=self.chunk_size)
+        return kde_log_density(emb, emb, bandwidth=self.bandwidth, exclude_self=loo, chunk_size=self.chunk_size,
+                               precision=self.precision)  # fmt: skip
 
     @torch.no_grad()
     def set_reference(self, emb: Tensor) -> None:
@@ -128,12 +135,14 @@ class KDENoveltyReward:
         """log ρ(y) of queries (B, d) over the fitted memory -> (B,)."""
         if self.memory is None:
             raise RuntimeError("call fit(memory) before scoring queries")
-        return kde_log_density(query, self.memory, bandwidth=self.bandwidth, chunk_size=self.chunk_size)
+        return kde_log_density(query, self.memory, bandwidth=self.bandwidth, chunk_size=self.chunk_size,
+                               precision=self.precision)  # fmt: skip
 
     def _reference_log_density(self, query: Tensor) -> Tensor:
         if self.reference is None:
             raise RuntimeError(f"baseline={self.baseline!r} needs set_reference(random_phase_embeddings) first")
-        return kde_log_density(query, self.reference, bandwidth=self.bandwidth, chunk_size=self.chunk_size)
+        return kde_log_density(query, self.reference, bandwidth=self.bandwidth, chunk_size=self.chunk_size,
+                               precision=self.precision)  # fmt: skip
 
     @torch.no_grad()
     def __call__(self, query: Tensor) -> Tensor:
