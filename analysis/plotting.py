@@ -1,7 +1,7 @@
 """Matplotlib set-up shared by the figure commands: the Agg backend, one colour per row, and byte-stable files.
 
 :func:`save` writes PNG and PDF without the timestamps and version strings matplotlib otherwise embeds, so re-running
-a command leaves the files byte for byte as they were.
+a command leaves the files byte for byte as they were; a PNG is at most ``PNG_MAX_WIDTH`` pixels wide.
 """
 
 from __future__ import annotations
@@ -15,11 +15,15 @@ matplotlib.use("Agg")  # before pyplot is imported: no display needed
 import matplotlib.pyplot as plt
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from PIL import Image
 
 plt.rcParams.update({"svg.hashsalt": "curiosity", "font.size": 8, "axes.titlesize": 9, "legend.fontsize": 6,
                      "figure.dpi": 100, "savefig.dpi": 120})  # fmt: skip
 
 PNG_METADATA = {"Software": None}
+# A PNG is at most this wide (a report with many long row labels would otherwise be 3,000+ pixels wide and 0.5 MB, and
+# every landing of results rewrites it); the PDF beside it keeps every detail.
+PNG_MAX_WIDTH = 1600
 PDF_METADATA = {"CreationDate": None, "Producer": None, "Creator": None}
 
 
@@ -58,7 +62,14 @@ def save(fig: Figure, out: Path, name: str) -> list[Path]:
     out.mkdir(parents=True, exist_ok=True)
     png, pdf = out / f"{name}.png", out / f"{name}.pdf"
     fig.tight_layout()
-    fig.savefig(png, metadata=PNG_METADATA, bbox_inches="tight")
+    dpi = float(plt.rcParams["savefig.dpi"])
+    for _ in range(4):  # the tight box scales almost, not exactly, with the dpi: a few re-saves converge
+        fig.savefig(png, metadata=PNG_METADATA, bbox_inches="tight", dpi=dpi)
+        with Image.open(png) as image:
+            width = image.width
+        if width <= PNG_MAX_WIDTH:
+            break
+        dpi *= 0.99 * PNG_MAX_WIDTH / width
     fig.savefig(pdf, metadata=PDF_METADATA, bbox_inches="tight")
     plt.close(fig)
     return [png, pdf]

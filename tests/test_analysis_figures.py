@@ -62,3 +62,21 @@ def test_no_finished_run_is_one_line(tmp_path) -> None:
     for root in (tmp_path, tmp_path / "missing"):
         res = analysis("figures", root)
         assert res.returncode != 0 and res.stderr.startswith("error: ") and len(res.stderr.splitlines()) == 1
+
+
+def test_a_wide_figure_is_saved_at_most_png_max_width_pixels_wide(tmp_path) -> None:
+    """A figure with many long row labels (the top-level report's) is written as a PNG at most ``PNG_MAX_WIDTH``
+    pixels wide, at a lower dpi; the PDF beside it keeps every detail; a narrow figure keeps the default dpi."""
+    from analysis.plotting import PNG_MAX_WIDTH, panels, save
+
+    fig, axes = panels(6)  # 27 inches: 3,240 pixels at the default 120 dpi
+    for ax in axes:
+        ax.plot([0, 1], [0, 1], label="a long row label " * 8)
+    png, pdf = save(fig, tmp_path, "wide")
+    with Image.open(png) as image:
+        assert PNG_MAX_WIDTH * 0.8 <= image.width <= PNG_MAX_WIDTH
+    assert pdf.stat().st_size > 0
+    fig, _ = panels(1)
+    png, _ = save(fig, tmp_path, "narrow")
+    with Image.open(png) as image:
+        assert image.width < PNG_MAX_WIDTH and image.info["dpi"][0] == pytest.approx(120, abs=1)
