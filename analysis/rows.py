@@ -9,6 +9,8 @@ the default agent, one with ``planner.horizon=5 planner.temperature=0``, become 
 
 from __future__ import annotations
 
+import functools
+
 import fnmatch
 import json
 from collections.abc import Sequence
@@ -28,8 +30,16 @@ IGNORED = ("seed", "progress", "threads", "resume", "checkpoint_every", "env.n_a
 def flat_config(run_dir: str | Path) -> dict[str, object]:
     """A run's ``.hydra/config.yaml`` over the current defaults of its group choices (so that a key added after the run
     was made has its default, which keeps the old behaviour, and an oracle run is told apart from the learned-model
-    runs made before ``planner.model`` existed), resolved where it can be, flattened to ``{"planner.horizon": 3}``."""
-    cfg = saved_config(run_dir)
+    runs made before ``planner.model`` existed), resolved where it can be, flattened to ``{"planner.horizon": 3}``.
+    Read once per process and file version (one analysis command reads every run's config three times)."""
+    path = Path(run_dir).resolve() / ".hydra" / "config.yaml"
+    stat = path.stat()
+    return dict(_flat_config(path, stat.st_mtime_ns, stat.st_size))
+
+
+@functools.lru_cache(maxsize=4096)
+def _flat_config(path: Path, mtime_ns: int, size: int) -> dict[str, object]:
+    cfg = saved_config(path.parent.parent)
     try:
         tree = OmegaConf.to_container(cfg, resolve=True, enum_to_str=True)
     except Exception:  # an interpolation that needs a resolver of the runner: keep the raw text

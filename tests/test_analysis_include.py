@@ -108,3 +108,21 @@ def test_the_committed_presets_include_only_runs_of_the_same_config(tmp_path: Pa
                 assert identity(run_dir) == identity(made), run_dir
                 checked += 1
     assert checked >= 6  # Table 1's default agent on seeds 100-105 at least (Figure 6)
+
+
+def test_flat_config_is_read_once_and_again_when_the_file_changes(tmp_path: Path) -> None:
+    """The analysis reads every run's config several times per command: ``flat_config`` keeps what it read per file
+    version, and a rewritten ``.hydra/config.yaml`` (an edited or re-run directory) is read again."""
+    from analysis.rows import flat_config
+    from tests.synthetic_runs import make_runs
+
+    root = make_runs(tmp_path / "runs")
+    run = next(p.parent for p in sorted(root.rglob("summary.json")))
+    first = flat_config(run)
+    first["planner.horizon"] = -1  # a caller's change does not reach the next caller
+    assert flat_config(run)["planner.horizon"] != -1
+    config = run / ".hydra" / "config.yaml"
+    text = config.read_text()
+    assert "horizon: " in text
+    config.write_text(text.replace("horizon: ", "horizon: 7 #", 1))
+    assert flat_config(run)["planner.horizon"] == 7

@@ -446,9 +446,21 @@ _GROUP_SCHEMAS: dict[str, dict[str, type]] = {
 }
 
 
+def _stored(cs: ConfigStore) -> bool:
+    """Whether every schema is in the store already (the analysis composes a config per run directory: registering
+    the ~40 schemas again each time took 0.1 s a call)."""
+    schema = cs.repo.get("schema", {})
+    return "base_config.yaml" in cs.repo and all(
+        f"{name}.yaml" in schema.get(group, {}) for group, schemas in _GROUP_SCHEMAS.items() for name in schemas
+    )
+
+
 def register_schemas() -> None:
-    """Register the top-level schema as ``base_config`` and each option schema as ``schema/<group>/<name>``."""
+    """Register the top-level schema as ``base_config`` and each option schema as ``schema/<group>/<name>`` (once:
+    a call that finds them all stored does nothing)."""
     cs = ConfigStore.instance()
+    if _stored(cs):
+        return
     cs.store(name="base_config", node=Config)
     for group, schemas in _GROUP_SCHEMAS.items():
         for name, node in schemas.items():
