@@ -21,7 +21,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from curiosity.envs.wrappers import normalise_pixels
+from curiosity.envs.wrappers import normalise_pixels, wrapper_chain
 
 REMOTE = "noisy_tv"
 _STREAM = 0x7E1E  # the TV generator's stream, apart from any other generator seeded with the run's seed
@@ -106,8 +106,4 @@ class NoisyTV(gym.ObservationWrapper, gym.utils.RecordConstructorArgs):
 
 def find_tv(env: gym.Env) -> NoisyTV | None:
     """The :class:`NoisyTV` among ``env``'s wrappers, or None."""
-    while isinstance(env, gym.Wrapper):
-        if isinstance(env, NoisyTV):
-            return env
-        env = env.env
-    return None
+    return next((w for w in wrapper_chain(env) if isinstance(w, NoisyTV)), None)

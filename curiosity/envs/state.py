@@ -10,12 +10,7 @@ from gymnasium.wrappers import FrameStackObservation, TimeLimit
 
 from curiosity.envs.adapter import EnvAdapter
 from curiosity.envs.distractor import NoisyTV
-
-
-def _wrappers(env: gym.Env):
-    while isinstance(env, gym.Wrapper):
-        yield env
-        env = env.env
+from curiosity.envs.wrappers import wrapper_chain
 
 
 def env_state(env: gym.Env, adapter: EnvAdapter) -> dict[str, Any]:
@@ -23,7 +18,7 @@ def env_state(env: gym.Env, adapter: EnvAdapter) -> dict[str, Any]:
     noisy TV's patch and generator (with a distractor)."""
     state: dict[str, Any] = {"physical": adapter.physical_state(env).copy(),
                              "np_random": env.unwrapped.np_random.bit_generator.state}  # fmt: skip
-    for w in _wrappers(env):
+    for w in wrapper_chain(env):
         if isinstance(w, FrameStackObservation):
             state["frames"] = [np.array(f, copy=True) for f in w.obs_queue]
         elif isinstance(w, TimeLimit):
@@ -38,7 +33,7 @@ def restore_env(env: gym.Env, state: dict[str, Any], seed: int, adapter: EnvAdap
     env.reset(seed=seed)
     adapter.set_physical_state(env, state["physical"])
     env.unwrapped.np_random.bit_generator.state = state["np_random"]
-    for w in _wrappers(env):
+    for w in wrapper_chain(env):
         if isinstance(w, FrameStackObservation):
             w.obs_queue.clear()
             w.obs_queue.extend(np.array(f, copy=True) for f in state["frames"])

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
 import gymnasium as gym
 import numpy as np
@@ -43,3 +43,10 @@ class FastRenderObservation(gym.ObservationWrapper, gym.utils.RecordConstructorA
 
     def observation(self, observation: np.ndarray) -> np.ndarray:
         return self.renderer(np.asarray(self.env.unwrapped.state))
+
+
+def wrapper_chain(env: gym.Env) -> Iterator[gym.Wrapper]:
+    """``env`` and each wrapper below it, outermost first, down to (not including) the unwrapped env."""
+    while isinstance(env, gym.Wrapper):
+        yield env
+        env = env.env
