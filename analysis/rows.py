@@ -9,9 +9,8 @@ the default agent, one with ``planner.horizon=5 planner.temperature=0``, become 
 
 from __future__ import annotations
 
-import functools
-
 import fnmatch
+import functools
 import json
 from collections.abc import Sequence
 from pathlib import Path

@@ -80,12 +80,12 @@ def kde_log_density(
         raise ValueError("exclude_self=True needs at least 2 memory rows")
     inplace = not needs_grad(query, memory)
     inv_two_h2 = 1.0 / (2.0 * float(bandwidth) ** 2)
-    q64 = query.to(PRECISIONS[precision] if inplace else torch.float64)  # float32 only where nothing needs a gradient
+    q = query.to(PRECISIONS[precision] if inplace else torch.float64)  # float32 only where nothing needs a gradient
     blocks = []
     for q0, q1 in query_blocks(query.shape[0], chunk_size):
         # with exclude_self every chunk has >= 2 columns, so no row of a chunk is entirely left out
         parts = [_chunk_log_sum(d2, inv_two_h2, inplace)
-                 for d2 in sq_dist_chunks(q64[q0:q1], q0, memory, chunk_size, exclude_self=exclude_self, inplace=inplace,
+                 for d2 in sq_dist_chunks(q[q0:q1], q0, memory, chunk_size, exclude_self=exclude_self, inplace=inplace,
                                           min_size=2 if exclude_self else 1)]  # fmt: skip
         blocks.append(parts[0] if len(parts) == 1 else torch.logsumexp(torch.stack(parts, dim=1), dim=1))
     log_rho = blocks[0] if len(blocks) == 1 else torch.cat(blocks)
