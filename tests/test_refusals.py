@@ -113,7 +113,8 @@ OTHER = {
     "a live lock": Case((), "run.lock", alter="lock"),
     "truncated checkpoint": Case((), "checkpoint.pt", alter="truncated"),
     "empty checkpoint": Case((), "checkpoint.pt", alter="empty"),
-    "no checkpoint": Case((), "hydra.run.dir", alter="no_checkpoint"),
+    "unfinished, no checkpoint": Case((), "hydra.run.dir", alter="unfinished_no_checkpoint"),
+    "finished, no checkpoint, another configuration": Case(("seed=1",), "seed", alter="no_checkpoint"),
     "run directory is a file": Case(("hydra.run.dir={run}/summary.json",), "hydra.run.dir"),
     "read-only run directory": Case(("hydra.run.dir={read_only}/run",), "hydra.run.dir"),
     "sweep directory is a file": Case(("-m", "seed=0,1", "hydra.sweep.dir={run}/metrics.csv"), "hydra.sweep.dir"),
@@ -156,7 +157,8 @@ def live_process() -> Iterator[int]:
 
 
 def _altered(finished: Path, tmp_path: Path, alter: str, request: pytest.FixtureRequest) -> Path:
-    """A copy of the finished run, altered: locked by a live process, its checkpoints damaged or gone."""
+    """A copy of the finished run, altered: locked by a live process, its checkpoints damaged or gone (and, for an
+    unfinished run, its summary)."""
     run_dir = tmp_path / "altered"
     shutil.copytree(finished, run_dir)
     checkpoints = [run_dir / "checkpoint.pt", run_dir / "checkpoint.prev.pt"]
@@ -167,8 +169,10 @@ def _altered(finished: Path, tmp_path: Path, alter: str, request: pytest.Fixture
             path.write_bytes(path.read_bytes()[:1000])
         elif alter == "empty":
             path.write_bytes(b"")
-        elif alter == "no_checkpoint":
+        elif alter in ("no_checkpoint", "unfinished_no_checkpoint"):
             path.unlink()
+    if alter == "unfinished_no_checkpoint":  # a run stopped before its end whose checkpoints were lost
+        (run_dir / "summary.json").unlink()
     return run_dir
 
 

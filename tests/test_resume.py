@@ -131,6 +131,33 @@ def test_a_directory_with_a_run_but_no_checkpoint_is_not_overwritten(tmp_path: P
     assert (tmp_path / "metrics.csv").read_text() == "step\n1\n"
 
 
+def test_a_finished_run_kept_without_its_checkpoint_is_complete_and_left_as_it_was(tmp_path: Path) -> None:
+    """Committed results keep ``.hydra/``, ``metrics.csv`` and ``summary.json``, not checkpoints: the same command
+    again (a sweep preset re-run in a fresh clone) finds that run complete; another configuration is refused."""
+    from omegaconf import OmegaConf
+
+    args = [*ARGS, "budget.max_steps=50"]
+    out = tmp_path / "sweep" / "run"
+    summary = run(compose_cfg(args), out)
+    (out / ".hydra").mkdir()
+    (out / ".hydra" / "config.yaml").write_text(OmegaConf.to_yaml(compose_cfg(args)))  # as the job writes it
+    for name in ("checkpoint.pt", "checkpoint.prev.pt"):
+        (out / name).unlink(missing_ok=True)
+    before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
+
+    assert run(compose_cfg([*args, "progress=true"]), out) == summary  # volatile keys may differ
+    with pytest.raises(RunDirectoryError, match=r"finished run of another configuration \(seed: 3 there, 4 now\)"):
+        run(compose_cfg([*args, "seed=4"]), out)
+    with pytest.raises(RunDirectoryError, match="resume=false"):
+        run(compose_cfg([*args, "resume=false"]), out)
+    res = run_cli(["-m", *args, f"hydra.sweep.dir={out.parent}", "hydra.sweep.subdir=run"], cwd=tmp_path)
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert "already complete" in res.stdout + res.stderr
+    assert not (out.parent / "failed_jobs.txt").exists()
+    assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file() and p.name != "train.log"} == {
+        p: b for p, b in before.items() if p.name != "train.log"}  # fmt: skip
+
+
 def test_a_live_writer_locks_its_run_directory(tmp_path: Path) -> None:
     sleeper = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
     try:

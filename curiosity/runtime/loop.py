@@ -84,11 +84,43 @@ def _differences(saved: dict[str, Any], now: dict[str, Any], prefix: str = "") -
     return out
 
 
+FINISHED = {"finished": True}  # what existing_checkpoint returns for a complete run kept without its checkpoint
+
+
+def _saved_identity(run_dir: Path) -> dict[str, Any] | None:
+    """The identity of the config in ``run_dir/.hydra/config.yaml``; None when there is none or it cannot be read."""
+    path = run_dir / ".hydra" / "config.yaml"
+    try:
+        return identity(OmegaConf.load(path))  # type: ignore[arg-type]
+    except Exception:  # missing, unparsable or unresolvable: not a run this one can recognise
+        return None
+
+
+def _finished_without_checkpoint(cfg: DictConfig, run_dir: Path) -> bool:
+    """Whether ``run_dir`` holds this configuration's complete run with its checkpoint removed (committed results keep
+    ``.hydra/``, ``metrics.csv`` and ``summary.json`` only). A complete run of another configuration is refused."""
+    saved = _saved_identity(run_dir) if (run_dir / "summary.json").exists() else None
+    if saved is None:
+        return False
+    diff = _differences(saved, identity(cfg))
+    if diff:
+        raise RunDirectoryError(f"{run_dir} holds a finished run of another configuration ({', '.join(diff[:5])}); it "
+                                "is not overwritten; allowed: that run's configuration, or another run directory")  # fmt: skip
+    return True
+
+
 def existing_checkpoint(cfg: DictConfig, run_dir: Path) -> dict[str, Any] | None:
-    """The checkpoint to resume from, None for a fresh directory; refuses anything else."""
+    """The checkpoint to resume from, :data:`FINISHED` for this configuration's complete run kept without its
+    checkpoint, None for a fresh directory; refuses anything else."""
     ckpt = load_checkpoint(run_dir)
     if ckpt is None:
         if (run_dir / "metrics.csv").exists():
+            if _finished_without_checkpoint(cfg, run_dir):
+                if not cfg.resume:
+                    raise RunDirectoryError(f"resume=false: {run_dir} holds this configuration's finished run, not "
+                                            "overwritten; allowed: resume=true (reports that run), or another run "
+                                            "directory")  # fmt: skip
+                return FINISHED
             raise RunDirectoryError(f"{run_dir} already holds a run without a checkpoint; it is not overwritten; "
                                     "allowed: another run directory (hydra.run.dir)")  # fmt: skip
         return None
