@@ -7,11 +7,16 @@ variants (KDE with other bandwidth multipliers, kNN). Neither Acrobot nor Mounta
 mechanical energy in (the env adapter's ``energy``), so for each variant it prints the mean Spearman correlation
 between the novelty return and the energy the sequence ends with, how often that correlation is positive, and how
 often the novelty-best first action is the energy-best one (1/3 by chance with three actions).
+
+A run that ended at the goal is checkpointed in its terminal state; there, and whenever the walk reaches the goal, the
+env is reset and the walk goes on from the start state with the same agent (model and memory as checkpointed), so a
+finished run gives its ``--states`` states too.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from collections.abc import Callable
 from pathlib import Path
@@ -50,6 +55,15 @@ def _variants(agent, bandwidths: list[float], k: int) -> dict[str, Callable[[Ten
     return out
 
 
+def _ended_at_goal(run_dir: Path, step: int) -> bool:
+    """Whether the run reached the goal at the checkpoint's step (the env is terminal there), from its summary."""
+    path = run_dir / "summary.json"
+    if not path.is_file():
+        return False
+    summary = json.loads(path.read_text())
+    return summary.get("steps_to_goal") == step  # None when it never reached it; a run past the goal was reset
+
+
 def landscape(run_dir: str | Path, states: int = 20, bandwidths: tuple[float, ...] = (2.0, 0.5),
               k: int = 5) -> dict[str, dict[str, float]]:  # fmt: skip
     """Per variant: ``rho`` (mean Spearman of novelty return and final energy), ``positive`` (fraction of states
@@ -57,6 +71,9 @@ def landscape(run_dir: str | Path, states: int = 20, bandwidths: tuple[float, ..
     run = restore_run(run_dir)
     energy = adapter_of(run.cfg.env).energy
     agent, env, obs, step = run.agent, run.env, run.obs, run.step
+    if _ended_at_goal(Path(run_dir), step):
+        obs, _ = env.reset()
+        agent.queue = []  # the rest of a committed sequence belongs to the episode that ended
     if energy is None or not hasattr(agent, "planner") or agent.q is not None:
         raise RestoreError(f"{run_dir}: the landscape needs the paper's agent with planner=mpc on Acrobot or MountainCar")
     torch.set_num_threads(1)
@@ -83,7 +100,8 @@ def landscape(run_dir: str | Path, states: int = 20, bandwidths: tuple[float, ..
         obs, _, terminated, _, _ = env.step(agent.act(obs, step))
         step += 1
         if terminated:
-            break
+            obs, _ = env.reset()
+            agent.queue = []
     return {name: {"rho": float(np.mean(rho[name])) if rho[name] else float("nan"),
                    "positive": float(np.mean(np.array(rho[name]) > 0)) if rho[name] else float("nan"),
                    "first_action": float(np.mean(hit[name])), "states": float(len(hit[name]))}

@@ -276,6 +276,40 @@ def test_landscape_command_reports_every_variant_and_refuses_the_chain(
     assert "Acrobot or MountainCar" in capsys.readouterr().err
 
 
+def test_landscape_walks_on_from_the_start_after_the_goal(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A run checkpointed at the goal (its terminal state) and a walk that reaches the goal: the env is reset and the
+    walk goes on, so every requested state is scored."""
+    import analysis.landscape as landscape_module
+
+    finished_run(compose_cfg([*FAST, "agent.probe_every=0", "planner.horizon=2"]), tmp_path / "run")
+    summary_path = tmp_path / "run" / "summary.json"
+    summary = json.loads(summary_path.read_text())
+    summary["steps_to_goal"] = summary["env_steps"]  # as if the last step had reached the goal
+    summary_path.write_text(json.dumps(summary))
+    resets = []
+    restore = landscape_module.restore_run
+
+    def restore_at_goal(run_dir):
+        restored = restore(run_dir)
+        env, real_step, real_reset = restored.env, restored.env.step, restored.env.reset
+
+        def step_to_goal(action):  # every step reaches the goal
+            obs, reward, _, truncated, info = real_step(action)
+            return obs, reward, True, truncated, info
+
+        def counted_reset(**kwargs):
+            resets.append(1)
+            return real_reset(**kwargs)
+
+        env.step, env.reset = step_to_goal, counted_reset
+        return restored
+
+    monkeypatch.setattr(landscape_module, "restore_run", restore_at_goal)
+    result = landscape_module.landscape(tmp_path / "run", states=3, bandwidths=(2.0,))
+    assert all(r["states"] == 3 for r in result.values())
+    assert len(resets) == 1 + 3  # the terminal checkpoint, then after each step's goal
+
+
 def test_diagnostics_do_not_change_what_the_agent_does(tmp_path: Path) -> None:
     """The noise check and the probe draw dropout masks in a forked RNG: the actions are the same without them
     (same config, seed and machine, one thread: exact)."""
