@@ -4,7 +4,7 @@ The question: does an ICM/NGU-style inverse-dynamics loss (which action led from
 MLP head on [s_t, s_{t+1}]) added to the paper agent's representation loss make the latent's novelty tell the
 frontier (pumping states) from random play, i.e. raise ``python -m analysis.representation``'s AUC?
 
-Run from the repository root (commit 6573038):
+Run from the repository root (commits 6573038 and 445f89c, the same code):
 
     DS=<data seed> python results/agent_study/representation/inverse/inverse_dynamics.py COEF [OVERRIDES...]
 
