@@ -17,10 +17,11 @@ from tests.conftest import REPO
 TUNING = REPO / "results" / "tuning"  # three finished seeds and one stopped at env step 1990 (no summary.json)
 
 
-def analysis(module: str, *args: str | Path) -> subprocess.CompletedProcess:
+def analysis(module: str, *args: str | Path, timeout: float = 120) -> subprocess.CompletedProcess:
+    """Run ``python -m analysis.<module> ARGS`` from the repository root; ``timeout`` (s) only guards against a hang."""
     env = {**os.environ, "PYTHONPATH": str(REPO)}
     res = subprocess.run([sys.executable, "-m", f"analysis.{module}", *map(str, args)], cwd=REPO, env=env,
-                         capture_output=True, text=True, timeout=120)  # fmt: skip
+                         capture_output=True, text=True, timeout=timeout)  # fmt: skip
     assert "Traceback" not in res.stdout + res.stderr, res.stderr
     return res
 
