@@ -18,11 +18,11 @@ import os
 import sys
 
 import torch
-import torch.nn.functional as F
 
 import analysis.representation as rep
 import curiosity.agents.paper as paper
 from curiosity.agents.representation import LossWeights, representation_terms
+from curiosity.intrinsic.icm import inverse_loss
 
 coef = float(sys.argv[1])
 overrides = sys.argv[2:]
@@ -35,7 +35,7 @@ def terms_with_inverse(model, seg, enc, regulariser, w):
     terms, logs = representation_terms(model, seg, enc, regulariser, w)
     if coef > 0:
         logits = HEAD["head"](torch.cat([enc.z[:, 0], enc.z[:, 1]], dim=1))
-        terms["inverse"] = F.cross_entropy(logits, seg.act[:, 0])
+        terms["inverse"] = inverse_loss(logits, seg.act[:, 0])  # the ICM baseline's L_inv (cross-entropy)
         logs["losses/inverse"] = terms["inverse"].item()
     return terms, logs
 
