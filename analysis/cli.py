@@ -26,6 +26,14 @@ class Options:
     args: argparse.Namespace
 
 
+def comma_ints(text: str) -> list[int]:
+    """``"0,300,1000"`` -> [0, 300, 1000]; [] when an item is not an integer (the caller prints its error line)."""
+    try:
+        return [int(v) for v in text.split(",")]
+    except ValueError:
+        return []
+
+
 def parser(description: str) -> argparse.ArgumentParser:
     """The options every analysis command shares: RUNS_DIR, --out, --group-by, --pool."""
     p = argparse.ArgumentParser(description=description)

@@ -35,6 +35,7 @@ from omegaconf import DictConfig
 from scipy.stats import spearmanr
 
 from curiosity.agents.paper import PaperAgent
+from analysis.cli import comma_ints
 from curiosity.config import ConfigError
 from curiosity.config.build import build, choice
 from curiosity.envs import adapter_of, make_env
@@ -214,10 +215,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--data-seed", type=int, default=1, help="env seed of the training data (probe sets: +1, +2)")
     parser.add_argument("--json", help="also write the rows to this file")
     args = parser.parse_args(argv)
-    try:
-        iters = [int(v) for v in args.iters.split(",")]
-    except ValueError:
-        iters = []
+    iters = comma_ints(args.iters)
     if not iters or min(iters) < 0 or iters != sorted(iters) or args.train_steps < 2 or args.probe_steps < 5:
         print(f"error: --iters={args.iters} --train-steps={args.train_steps} --probe-steps={args.probe_steps}: "
               "allowed: ascending integers >= 0, train steps >= 2, probe steps >= 5", file=sys.stderr)  # fmt: skip

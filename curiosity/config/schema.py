@@ -130,6 +130,9 @@ class ConvEncoderConfig:
     in_channels: int = "${env.frame_stack}"  # type: ignore[assignment]
     latent_dim: int = "${agent.internal_dim}"  # type: ignore[assignment]
     frame_size: int = "${env.frame_size}"  # type: ignore[assignment]
+    blur_sigma: float = 0.0  # > 0: blur each frame first (σ in pixels); 0: NSRS's encoder as it is
+    differences: bool = False  # newest frame + successive frame differences instead of the frames
+    difference_gain: float = 1.0
 
 
 @dataclass

@@ -47,6 +47,7 @@ RULES: list[Rule] = [
     ("agent.first_call_min_iterations", lambda v: v >= 0, "an integer >= 0 (0: the budget's first call)"),
     ("agent.q_target_every", lambda v: v >= 1, "an integer >= 1"),
     ("env.frame_size", lambda v: v >= 8, "an integer >= 8"),
+    ("encoder.blur_sigma", lambda v: v >= 0, "a number >= 0 (0: no blur)"),
     ("env.frame_stack", lambda v: v >= 1, "an integer >= 1"),
     ("env.state_dim", lambda v: v >= 1, "an integer >= 1"),
     ("env.n_actions", lambda v: v >= 2, "an integer >= 2"),

@@ -9,6 +9,7 @@ import torch
 from torch import Tensor, nn
 
 from curiosity.nets.activations import FastTanh
+from curiosity.nets.preprocess import FrameDifferences, GaussianBlur
 
 
 def tanh_mlp(sizes: Sequence[int], *, final_activation: bool = False, dropout: float = 0.0) -> nn.Sequential:
@@ -53,11 +54,29 @@ class ConvEncoder(nn.Module):
         latent_dim: d, the latent size.
         channels_last: store weights and run convolutions in channels-last layout.
         frame_size: side of the square frames (32: the flattened features are 128).
+        blur_sigma: > 0: a fixed Gaussian blur of every frame first (:class:`~curiosity.nets.preprocess.GaussianBlur`,
+            σ in pixels); 0 (NSRS): none.
+        differences: feed the newest frame and the successive differences of the (blurred) frames instead of the
+            frames (:class:`~curiosity.nets.preprocess.FrameDifferences`); False (NSRS): the frames.
+        difference_gain: factor on those differences.
     """
 
-    def __init__(self, in_channels: int = 4, latent_dim: int = 4, channels_last: bool = True, frame_size: int = 32) -> None:
+    def __init__(
+        self,
+        in_channels: int = 4,
+        latent_dim: int = 4,
+        channels_last: bool = True,
+        frame_size: int = 32,
+        blur_sigma: float = 0.0,
+        differences: bool = False,
+        difference_gain: float = 1.0,
+    ) -> None:
         super().__init__()
         self.channels_last = channels_last
+        steps: list[nn.Module] = [GaussianBlur(blur_sigma)] if blur_sigma > 0 else []
+        if differences:
+            steps.append(FrameDifferences(difference_gain))
+        self.preprocess = nn.Sequential(*steps)  # no parameters, no buffers in the state dict: checkpoints unchanged
         # max-pooling before tanh: tanh is increasing, so MaxPool(tanh(x)) = tanh(MaxPool(x)) and the gradient reaches
         # the same element; tanh then runs on 1/16 and 1/9 of the values (module indices, hence checkpoints, unchanged)
         self.features = nn.Sequential(
@@ -86,6 +105,7 @@ class ConvEncoder(nn.Module):
         Returns:
             (B, d) latents s = E(o).
         """
+        obs = self.preprocess(obs)
         if self.channels_last:
             obs = obs.contiguous(memory_format=torch.channels_last)
         return self.head(self.features(obs))

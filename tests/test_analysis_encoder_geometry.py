@@ -1,0 +1,52 @@
+"""``python -m analysis.encoder_geometry``: its metrics on inputs with known answers, a tiny end-to-end run, refusals."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from analysis import encoder_geometry as geo
+
+
+def test_geometry_is_one_for_the_state_itself_and_about_zero_for_noise() -> None:
+    rng = np.random.default_rng(0)
+    vectors = rng.normal(size=(120, 4))
+    exact = geo.geometry(vectors * 3.0 + 1.0, vectors, n_velocity=2)  # any scale and shift: standardised first
+    assert exact["rho_all"] == pytest.approx(1.0) and exact["knn"] == pytest.approx(1.0)
+    velocity_only = geo.geometry(vectors[:, 2:], vectors, n_velocity=2)
+    assert velocity_only["rho_velocity"] == pytest.approx(1.0)
+    assert abs(velocity_only["rho_pose"]) < 0.1  # independent columns: the pose distances are unrelated
+    noise = geo.geometry(rng.normal(size=(120, 4)), vectors, n_velocity=2)
+    assert abs(noise["rho_all"]) < 0.1 and noise["knn"] < 0.25
+
+
+def test_knn_overlap_counts_shared_neighbours() -> None:
+    a = np.arange(6, dtype=float)[:, None]
+    assert geo.knn_overlap(a, a, k=2) == 1.0
+    assert geo.knn_overlap(a, a[::-1].copy(), k=2) == 1.0  # the same neighbourhoods in another order
+
+
+def test_an_end_to_end_run_writes_its_rows(tmp_path, capsys) -> None:
+    out = tmp_path / "geometry.json"
+    assert geo.main(["env.renderer=fast", "encoder.blur_sigma=2", "--seeds", "0,1", "--states", "30",
+                     "--json", str(out)]) == 0  # fmt: skip
+    assert capsys.readouterr().out.count("\n") == 5  # header, rule, two seeds, the mean
+    result = json.loads(out.read_text())
+    assert [r["seed"] for r in result["rows"]] == [0, 1] and result["overrides"][-1] == "encoder.blur_sigma=2"
+    assert all(-1.0 <= r["rho_velocity"] <= 1.0 for r in result["rows"])
+
+
+def test_the_state_vector_encoder_sees_the_velocity(capsys) -> None:
+    # a random MLP of Acrobot's state vector weighs the velocities most (they span ±4π and ±9π, the pose ±1)
+    assert geo.main(["env.obs=state", "encoder=mlp", "--seeds", "0", "--states", "150"]) == 0
+    mean = capsys.readouterr().out.strip().splitlines()[-1].split("|")
+    assert float(mean[4]) > float(mean[3])  # rho_velocity > rho_pose
+
+
+def test_bad_arguments_get_one_line(capsys) -> None:
+    assert geo.main(["--seeds", "a"]) == 2
+    assert "error: --seeds=a" in capsys.readouterr().err
+    assert geo.main(["encoder.blur_sigma=-1", "--states", "20"]) == 2
+    assert "encoder.blur_sigma=-1" in capsys.readouterr().err
