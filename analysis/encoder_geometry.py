@@ -12,8 +12,11 @@ standardised latents and of standardised physical features:
 - ``rho_velocity``: its velocity part (the last P/2 entries: the physical velocities);
 - ``knn``: the mean overlap of each state's 10 nearest neighbours in the latent and in the state vector.
 
+With ``--run RUN_DIR`` the encoder is instead the run's trained one, restored from its checkpoint (its own config;
+overrides and ``--seeds`` are not used): what training made of the geometry.
+
 Nothing is trained and nothing is written unless ``--json FILE`` is given. The numbers are a diagnostic of the
-encoder's initial geometry (what the agent's first novelty sees), to compare configurations at the same seeds.
+encoder's geometry, to compare configurations at the same seeds.
 """
 
 from __future__ import annotations
@@ -21,7 +24,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import gymnasium as gym
@@ -35,6 +38,7 @@ from curiosity.config import ConfigError
 from curiosity.config.build import build
 from curiosity.envs import adapter_of, make_env
 from curiosity.runtime.preflight import checked_config
+from curiosity.runtime.restore import RestoreError, restore_run
 
 
 def state_vector(env: gym.Env, physical: np.ndarray) -> np.ndarray:
@@ -99,6 +103,23 @@ def geometry(latents: np.ndarray, vectors: np.ndarray, n_velocity: int) -> dict[
             "knn": knn_overlap(z, v)}  # fmt: skip
 
 
+def _encode(encoder: Callable[[torch.Tensor], torch.Tensor], obs: np.ndarray) -> np.ndarray:
+    with torch.no_grad():
+        return torch.cat([encoder(torch.as_tensor(obs[i : i + 256])) for i in range(0, len(obs), 256)]).double().numpy()
+
+
+def trained(run_dir: str, states: int = 400, data_seed: int = 0) -> dict[str, Any]:
+    """The geometry of the trained encoder of the run in ``run_dir``, restored from its checkpoint."""
+    run = restore_run(run_dir)
+    torch.set_num_threads(1)
+    obs, vectors, physical = sample_states(run.cfg, states, data_seed)
+    model = run.agent.model
+    with model.evaluating():
+        row = geometry(_encode(model.encode, obs), vectors, physical.shape[1] - physical.shape[1] // 2)
+    return {"run": str(run_dir), "step": run.step, "states": states, "data_seed": data_seed,
+            "rows": [{"seed": "trained", **row}], "mean": row}  # fmt: skip
+
+
 def study(overrides: Sequence[str], seeds: Sequence[int], states: int = 400, data_seed: int = 0) -> dict[str, Any]:
     """The encoder of ``overrides`` at each initialisation seed, on one fixed sample of states."""
     cfg = checked_config(overrides)[1]
@@ -109,9 +130,7 @@ def study(overrides: Sequence[str], seeds: Sequence[int], states: int = 400, dat
     for seed in seeds:
         torch.manual_seed(seed)
         encoder = build(cfg.encoder)
-        with torch.no_grad():
-            z = torch.cat([encoder(torch.as_tensor(obs[i : i + 256])) for i in range(0, len(obs), 256)])
-        rows.append({"seed": int(seed), **geometry(z.double().numpy(), vectors, n_velocity)})
+        rows.append({"seed": int(seed), **geometry(_encode(encoder, obs), vectors, n_velocity)})
     mean = {k: float(np.mean([r[k] for r in rows])) for k in ("rho_all", "rho_pose", "rho_velocity", "knn")}
     return {"overrides": list(overrides), "states": states, "data_seed": data_seed, "rows": rows, "mean": mean}
 
@@ -122,6 +141,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seeds", default="0,1,2", help="comma-separated encoder initialisation seeds (0,1,2)")
     parser.add_argument("--states", type=int, default=400, help="states sampled (400)")
     parser.add_argument("--data-seed", type=int, default=0, help="seed of the state sample (0)")
+    parser.add_argument("--run", help="measure this run's trained encoder (from its checkpoint) instead")
     parser.add_argument("--json", help="also write the result to this file")
     args = parser.parse_args(argv)
     seeds = comma_ints(args.seeds)
@@ -129,8 +149,11 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: --seeds={args.seeds} --states={args.states}: allowed: integers >= 0, states >= 12", file=sys.stderr)
         return 2
     try:
-        out = study(args.overrides, seeds, args.states, args.data_seed)
-    except ConfigError as err:
+        if args.run:
+            out = trained(args.run, args.states, args.data_seed)
+        else:
+            out = study(args.overrides, seeds, args.states, args.data_seed)
+    except (ConfigError, RestoreError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
     print("| seed | rho_all | rho_pose | rho_velocity | knn |\n|---|---|---|---|---|")

@@ -50,3 +50,19 @@ def test_bad_arguments_get_one_line(capsys) -> None:
     assert "error: --seeds=a" in capsys.readouterr().err
     assert geo.main(["encoder.blur_sigma=-1", "--states", "20"]) == 2
     assert "encoder.blur_sigma=-1" in capsys.readouterr().err
+
+
+def test_a_trained_run_is_measured_from_its_checkpoint(tmp_path, capsys) -> None:
+    from tests.conftest import compose_cfg
+    from tests.test_diagnostics import FAST, finished_run
+
+    finished_run(compose_cfg([*FAST, "agent.probe_every=0", "encoder.blur_sigma=2"]), tmp_path / "run")
+    out = tmp_path / "g.json"
+    assert geo.main(["--run", str(tmp_path / "run"), "--states", "30", "--json", str(out)]) == 0
+    result = json.loads(out.read_text())
+    assert result["step"] == 90 and result["rows"][0]["seed"] == "trained"
+    assert -1.0 <= result["mean"]["rho_velocity"] <= 1.0
+    capsys.readouterr()
+    (tmp_path / "run" / "checkpoint.pt").unlink()
+    assert geo.main(["--run", str(tmp_path / "run")]) == 2
+    assert "no checkpoint.pt" in capsys.readouterr().err
