@@ -12,6 +12,10 @@ standardised latents and of standardised physical features:
 - ``rho_velocity``: its velocity part (the last P/2 entries: the physical velocities);
 - ``knn``: the mean overlap of each state's 10 nearest neighbours in the latent and in the state vector.
 
+With ``--train-iters N`` each encoder is first trained with the paper agent's world model (the config's losses and
+optimiser) for N gradient iterations on 600 random-policy transitions (data seed ``--data-seed`` + 1), as
+``analysis.representation`` trains it: what the objective makes of the geometry, without a run.
+
 With ``--run RUN_DIR`` the encoder is instead the run's trained one, restored from its checkpoint (its own config;
 overrides and ``--seeds`` are not used): what training made of the geometry.
 
@@ -34,6 +38,8 @@ from omegaconf import DictConfig
 from scipy.stats import spearmanr
 
 from analysis.cli import comma_ints
+from analysis.representation import random_policy, rollout
+from curiosity.agents.paper import PaperAgent
 from curiosity.config import ConfigError
 from curiosity.config.build import build
 from curiosity.envs import adapter_of, make_env
@@ -120,8 +126,23 @@ def trained(run_dir: str, states: int = 400, data_seed: int = 0) -> dict[str, An
             "rows": [{"seed": "trained", **row}], "mean": row}  # fmt: skip
 
 
-def study(overrides: Sequence[str], seeds: Sequence[int], states: int = 400, data_seed: int = 0) -> dict[str, Any]:
-    """The encoder of ``overrides`` at each initialisation seed, on one fixed sample of states."""
+def trained_offline(cfg: DictConfig, iters: int, data_seed: int) -> Callable[[torch.Tensor], torch.Tensor]:
+    """The paper agent's encoder after ``iters`` world-model iterations on random-policy data (module doc)."""
+    data = rollout(cfg, 600, random_policy(int(cfg.env.n_actions)), data_seed + 1)
+    agent = PaperAgent(cfg)
+    for i in range(len(data.actions)):
+        agent.replay.add(data.obs[i], int(data.actions[i]), -1.0, data.next_obs[i], False)
+    agent.model.train()
+    for _ in range(iters):
+        agent._iteration()
+    agent.model.eval()
+    return agent.model.encode
+
+
+def study(overrides: Sequence[str], seeds: Sequence[int], states: int = 400, data_seed: int = 0,
+          train_iters: int = 0) -> dict[str, Any]:  # fmt: skip
+    """The encoder of ``overrides`` at each initialisation seed (trained ``train_iters`` iterations offline first),
+    on one fixed sample of states."""
     cfg = checked_config(overrides)[1]
     torch.set_num_threads(int(cfg.threads))
     obs, vectors, physical = sample_states(cfg, states, data_seed)
@@ -129,10 +150,11 @@ def study(overrides: Sequence[str], seeds: Sequence[int], states: int = 400, dat
     rows = []
     for seed in seeds:
         torch.manual_seed(seed)
-        encoder = build(cfg.encoder)
+        encoder = trained_offline(cfg, train_iters, data_seed) if train_iters else build(cfg.encoder)
         rows.append({"seed": int(seed), **geometry(_encode(encoder, obs), vectors, n_velocity)})
     mean = {k: float(np.mean([r[k] for r in rows])) for k in ("rho_all", "rho_pose", "rho_velocity", "knn")}
-    return {"overrides": list(overrides), "states": states, "data_seed": data_seed, "rows": rows, "mean": mean}
+    return {"overrides": list(overrides), "states": states, "data_seed": data_seed, "train_iters": train_iters,
+            "rows": rows, "mean": mean}  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -141,18 +163,20 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seeds", default="0,1,2", help="comma-separated encoder initialisation seeds (0,1,2)")
     parser.add_argument("--states", type=int, default=400, help="states sampled (400)")
     parser.add_argument("--data-seed", type=int, default=0, help="seed of the state sample (0)")
+    parser.add_argument("--train-iters", type=int, default=0, help="train each encoder offline first (0: untrained)")
     parser.add_argument("--run", help="measure this run's trained encoder (from its checkpoint) instead")
     parser.add_argument("--json", help="also write the result to this file")
     args = parser.parse_args(argv)
     seeds = comma_ints(args.seeds)
-    if not seeds or min(seeds) < 0 or args.states < 12:
-        print(f"error: --seeds={args.seeds} --states={args.states}: allowed: integers >= 0, states >= 12", file=sys.stderr)
+    if not seeds or min(seeds) < 0 or args.states < 12 or args.train_iters < 0:
+        print(f"error: --seeds={args.seeds} --states={args.states} --train-iters={args.train_iters}: allowed: "
+              "integers >= 0, states >= 12, train iterations >= 0", file=sys.stderr)  # fmt: skip
         return 2
     try:
         if args.run:
             out = trained(args.run, args.states, args.data_seed)
         else:
-            out = study(args.overrides, seeds, args.states, args.data_seed)
+            out = study(args.overrides, seeds, args.states, args.data_seed, args.train_iters)
     except (ConfigError, RestoreError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 2

@@ -38,6 +38,16 @@ def test_an_end_to_end_run_writes_its_rows(tmp_path, capsys) -> None:
     assert all(-1.0 <= r["rho_velocity"] <= 1.0 for r in result["rows"])
 
 
+def test_offline_training_changes_the_encoder(tmp_path) -> None:
+    untrained, trained = tmp_path / "u.json", tmp_path / "t.json"
+    common = ["env.renderer=fast", "--seeds", "0", "--states", "30"]
+    assert geo.main([*common, "--json", str(untrained)]) == 0
+    assert geo.main([*common, "--train-iters", "3", "--json", str(trained)]) == 0
+    before, after = (json.loads(p.read_text()) for p in (untrained, trained))
+    assert after["train_iters"] == 3 and before["train_iters"] == 0
+    assert after["mean"] != before["mean"]  # the agent's encoder after three optimiser steps
+
+
 def test_the_state_vector_encoder_sees_the_velocity(capsys) -> None:
     # a random MLP of Acrobot's state vector weighs the velocities most (they span ±4π and ±9π, the pose ±1)
     assert geo.main(["env.obs=state", "encoder=mlp", "--seeds", "0", "--states", "150"]) == 0
