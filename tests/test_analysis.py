@@ -65,6 +65,23 @@ def test_steps_table_lists_the_runs_not_finished(sweep: Path) -> None:
     assert "failed: " in res.stdout and "+foo=1" in res.stdout
 
 
+def test_steps_table_markdown_counts_runs_at_the_cap_beside_the_mean_of_those_that_reached() -> None:
+    import pandas as pd
+
+    from analysis.steps_table import to_markdown
+
+    base = {"method": "m", "command": "c", "incomplete": 0, "se": float("nan")}
+    table = pd.DataFrame([
+        {**base, "seeds": 2, "reached": 2, "per_seed": "100 300", "mean": 200.0, "se": 100.0, "mean_capped": 200.0},
+        {**base, "seeds": 2, "reached": 1, "per_seed": "100 >1000", "mean": 100.0, "mean_capped": 550.0},
+        {**base, "seeds": 1, "reached": 0, "per_seed": ">1000", "mean": float("nan"), "mean_capped": 1000.0},
+    ])  # fmt: skip
+    rows = to_markdown(table).splitlines()[2:]
+    assert rows[0].endswith("| 200.0 ± 100.0 |")
+    assert rows[1].endswith("| 100.0 (reached); 550.0 with the runs at the cap counted at the cap |")
+    assert rows[2].endswith("| 1000.0 with the runs at the cap counted at the cap |")
+
+
 def test_steps_table_splits_one_command_run_with_other_code_defaults(sweep: Path) -> None:
     """Seed 1 made as if by code whose default executes 5 planned actions: the same command line, not the same
     method. It gets its own row, labelled by the key that differs; the others (saved before the key existed) read
