@@ -35,11 +35,11 @@ import gymnasium as gym
 import numpy as np
 import torch
 from omegaconf import DictConfig
+from scipy.spatial.distance import pdist, squareform
 from scipy.stats import spearmanr
 
 from analysis.cli import comma_ints
-from analysis.representation import random_policy, rollout
-from curiosity.agents.paper import PaperAgent
+from analysis.representation import agent_with_data, random_policy, rollout
 from curiosity.config import ConfigError
 from curiosity.config.build import build
 from curiosity.envs import adapter_of, make_env
@@ -58,12 +58,12 @@ def sample_states(cfg: DictConfig, n: int, seed: int) -> tuple[np.ndarray, np.nd
     env, adapter = make_env(cfg.env, max_steps=10**9), adapter_of(cfg.env)
     low, high = np.asarray(cfg.env.coverage_low, dtype=np.float64), np.asarray(cfg.env.coverage_high, dtype=np.float64)
     half = len(low) // 2
+    mid = (low[half:] + high[half:]) / 2
     rng = np.random.default_rng(seed)
     env.reset(seed=seed)
     obs, vectors, physical = [], [], []
     for _ in range(n):
         state = rng.uniform(low, high)
-        mid = (low[half:] + high[half:]) / 2
         state[half:] = mid + (state[half:] - mid) * rng.uniform(size=len(low) - half) ** 2
         adapter.set_physical_state(env, state)
         for _ in range(4):
@@ -82,15 +82,14 @@ def _standardised(x: np.ndarray) -> np.ndarray:
 
 def pairwise(x: np.ndarray) -> np.ndarray:
     """The upper-triangle pairwise Euclidean distances of the rows of ``x`` (n, D) -> (n(n-1)/2,)."""
-    d = np.sqrt(((x[:, None, :] - x[None, :, :]) ** 2).sum(-1))
-    return d[np.triu_indices(len(x), 1)]
+    return pdist(x)
 
 
 def knn_overlap(a: np.ndarray, b: np.ndarray, k: int = 10) -> float:
     """Mean fraction of each row's ``k`` nearest neighbours in ``a`` (n, Da) that are among its ``k`` in ``b``."""
 
     def neighbours(x: np.ndarray) -> np.ndarray:
-        d = ((x[:, None, :] - x[None, :, :]) ** 2).sum(-1)
+        d = squareform(pdist(x))
         np.fill_diagonal(d, np.inf)
         return np.argsort(d, axis=1)[:, :k]
 
@@ -128,10 +127,7 @@ def trained(run_dir: str, states: int = 400, data_seed: int = 0) -> dict[str, An
 
 def trained_offline(cfg: DictConfig, iters: int, data_seed: int) -> Callable[[torch.Tensor], torch.Tensor]:
     """The paper agent's encoder after ``iters`` world-model iterations on random-policy data (module doc)."""
-    data = rollout(cfg, 600, random_policy(int(cfg.env.n_actions)), data_seed + 1)
-    agent = PaperAgent(cfg)
-    for i in range(len(data.actions)):
-        agent.replay.add(data.obs[i], int(data.actions[i]), -1.0, data.next_obs[i], False)
+    agent = agent_with_data(cfg, rollout(cfg, 600, random_policy(int(cfg.env.n_actions)), data_seed + 1))
     agent.model.train()
     for _ in range(iters):
         agent._iteration()

@@ -34,8 +34,8 @@ import torch
 from omegaconf import DictConfig
 from scipy.stats import spearmanr
 
-from curiosity.agents.paper import PaperAgent
 from analysis.cli import comma_ints
+from curiosity.agents.paper import PaperAgent
 from curiosity.config import ConfigError
 from curiosity.config.build import build, choice
 from curiosity.envs import adapter_of, make_env
@@ -174,6 +174,14 @@ def measure(agent: PaperAgent, cfg: DictConfig, data: ProbeSets, auc_physical: f
             "latent_std": [round(float(v), 3) for v in z_train.std(0)]}  # fmt: skip
 
 
+def agent_with_data(cfg: DictConfig, data: Trajectory) -> PaperAgent:
+    """A new paper agent of ``cfg`` whose replay holds the transitions of ``data`` (extrinsic reward −1, none final)."""
+    agent = PaperAgent(cfg)
+    for i in range(len(data.actions)):
+        agent.replay.add(data.obs[i], int(data.actions[i]), -1.0, data.next_obs[i], False)
+    return agent
+
+
 def study(overrides: Sequence[str], iters: Sequence[int], train_steps: int = 600, probe_steps: int = 300,
           data_seed: int = 1) -> list[dict[str, Any]]:  # fmt: skip
     """Train the configured world model on the fixed random-policy data; measure at each of ``iters`` (ascending)."""
@@ -181,9 +189,7 @@ def study(overrides: Sequence[str], iters: Sequence[int], train_steps: int = 600
     torch.set_num_threads(int(cfg.threads))
     torch.manual_seed(int(cfg.seed))
     data = probe_sets(cfg, train_steps, probe_steps, data_seed)
-    agent = PaperAgent(cfg)
-    for i in range(train_steps):
-        agent.replay.add(data.train.obs[i], int(data.train.actions[i]), -1.0, data.train.next_obs[i], False)
+    agent = agent_with_data(cfg, data.train)
     reference = physical_auc(cfg, data)
     out, done = [], 0
     for target in iters:
