@@ -249,3 +249,24 @@ def test_planner_commit_beyond_the_horizon_is_refused() -> None:
         validate(compose_cfg(["planner.horizon=3", "planner.commit=4"]))
     with pytest.raises(ConfigError, match=r"planner.commit=0"):
         validate(compose_cfg(["planner.commit=0"]))
+
+
+@pytest.mark.parametrize("encoder", ["conv", "mlp"])
+def test_a_frozen_encoder_keeps_its_weights_while_the_model_trains(encoder: str) -> None:
+    obs_args = ["env.renderer=fast"] if encoder == "conv" else ["env.obs=state", "encoder=mlp"]
+    cfg = compose_cfg([*obs_args, "encoder.frozen=true", "agent.batch_size=8"])
+    agent = build(cfg.baseline, cfg=cfg)
+    before = {k: v.clone() for k, v in agent.model.state_dict().items()}
+    rng = np.random.default_rng(0)
+    shape = (4, 32, 32) if encoder == "conv" else (6,)
+    obs = rng.random(size=shape).astype(np.float32)
+    for step in range(20):
+        nxt = rng.random(size=shape).astype(np.float32)
+        agent.replay.add(obs, step % 3, -1.0, nxt, False)
+        obs = nxt
+    for _ in range(3):
+        agent._iteration()
+    after = agent.model.state_dict()
+    enc = [k for k in before if k.startswith("encoder.")]
+    assert enc and all(torch.equal(before[k], after[k]) for k in enc)
+    assert any(not torch.equal(before[k], after[k]) for k in before if k.startswith("transition."))

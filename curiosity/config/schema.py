@@ -133,6 +133,7 @@ class ConvEncoderConfig:
     blur_sigma: float = 0.0  # > 0: blur each frame first (σ in pixels); 0: NSRS's encoder as it is
     differences: bool = False  # newest frame + successive frame differences instead of the frames
     difference_gain: float = 1.0
+    frozen: bool = False  # true: the encoder keeps its random initial weights (no loss trains it)
 
 
 @dataclass
@@ -142,6 +143,7 @@ class MLPEncoderConfig:
     in_dim: int = "${env.state_dim}"  # type: ignore[assignment]
     latent_dim: int = "${agent.internal_dim}"  # type: ignore[assignment]
     hidden: list[int] = field(default_factory=lambda: [200, 100, 50, 10])
+    frozen: bool = False  # true: the encoder keeps its random initial weights (no loss trains it)
 
 
 # ---------------------------------------------------------------- entropy (the IB regulariser)

@@ -59,6 +59,8 @@ class ConvEncoder(nn.Module):
         differences: feed the newest frame and the successive differences of the (blurred) frames instead of the
             frames (:class:`~curiosity.nets.preprocess.FrameDifferences`); False (NSRS): the frames.
         difference_gain: factor on those differences.
+        frozen: keep the initial (random) weights: no parameter takes a gradient, so no loss trains the encoder and
+            its latents never move (a fixed random-feature encoder, as in random-feature curiosity).
     """
 
     def __init__(
@@ -70,6 +72,7 @@ class ConvEncoder(nn.Module):
         blur_sigma: float = 0.0,
         differences: bool = False,
         difference_gain: float = 1.0,
+        frozen: bool = False,
     ) -> None:
         super().__init__()
         self.channels_last = channels_last
@@ -95,6 +98,7 @@ class ConvEncoder(nn.Module):
         self.head = nn.Linear(flat, latent_dim)
         if channels_last:
             self.features.to(memory_format=torch.channels_last)
+        self.requires_grad_(not frozen)
 
     def forward(self, obs: Tensor) -> Tensor:
         """Encode observations.
@@ -118,11 +122,14 @@ class MLPEncoder(nn.Module):
         in_dim: flattened observation size.
         latent_dim: d.
         hidden: hidden widths.
+        frozen: keep the initial (random) weights (as :class:`ConvEncoder`).
     """
 
-    def __init__(self, in_dim: int, latent_dim: int = 4, hidden: Sequence[int] = (200, 100, 50, 10)) -> None:
+    def __init__(self, in_dim: int, latent_dim: int = 4, hidden: Sequence[int] = (200, 100, 50, 10),
+                 frozen: bool = False) -> None:  # fmt: skip
         super().__init__()
         self.net = tanh_mlp([in_dim, *hidden, latent_dim])
+        self.requires_grad_(not frozen)
 
     def forward(self, obs: Tensor) -> Tensor:
         """Encode observations.
