@@ -270,3 +270,20 @@ def test_a_frozen_encoder_keeps_its_weights_while_the_model_trains(encoder: str)
     enc = [k for k in before if k.startswith("encoder.")]
     assert enc and all(torch.equal(before[k], after[k]) for k in enc)
     assert any(not torch.equal(before[k], after[k]) for k in before if k.startswith("transition."))
+
+
+def test_conv_with_random_features_trains_its_learned_part_only() -> None:
+    cfg = compose_cfg(["env.renderer=fast", "encoder=conv_with_random", "agent.internal_dim=6",
+                       "encoder.random_dim=2", "agent.batch_size=8"])  # fmt: skip
+    agent = build(cfg.baseline, cfg=cfg)
+    rng = np.random.default_rng(0)
+    obs = rng.random(size=(5, 4, 32, 32)).astype(np.float32)
+    assert agent.model.encode(torch.from_numpy(obs)).shape == (5, 6)
+    before = {k: v.clone() for k, v in agent.model.encoder.state_dict().items()}
+    for step in range(20):
+        agent.replay.add(obs[step % 5], step % 3, -1.0, obs[(step + 1) % 5], False)
+    for _ in range(3):
+        agent._iteration()
+    after = agent.model.encoder.state_dict()
+    assert all(torch.equal(before[k], after[k]) for k in before if k.startswith("random."))
+    assert all(not torch.equal(before[k], after[k]) for k in before if k.startswith("learned.") and "weight" in k)

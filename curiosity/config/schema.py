@@ -137,6 +137,17 @@ class ConvEncoderConfig:
 
 
 @dataclass
+class ConvWithRandomConfig(ConvEncoderConfig):
+    """The conv encoder's keys (for its trained part) and the frozen random part's."""
+
+    name: str = "conv_with_random"
+    _target_: str = "curiosity.nets.encoders.ConvWithRandomFeatures"
+    random_dim: int = 2  # the frozen random part's size (the learned part has agent.internal_dim - random_dim)
+    random_blur_sigma: float = 4.0
+    random_differences: bool = True
+
+
+@dataclass
 class MLPEncoderConfig:
     name: str = "mlp"
     _target_: str = "curiosity.nets.encoders.MLPEncoder"
@@ -428,7 +439,7 @@ class Config:
 
 _GROUP_SCHEMAS: dict[str, dict[str, type]] = {
     "env": {"env": EnvConfig},
-    "encoder": {"conv": ConvEncoderConfig, "mlp": MLPEncoderConfig},
+    "encoder": {"conv": ConvEncoderConfig, "conv_with_random": ConvWithRandomConfig, "mlp": MLPEncoderConfig},
     "entropy": {
         "gaussian_potential": GaussianPotentialConfig,
         "renyi": RenyiConfig,

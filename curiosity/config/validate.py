@@ -96,7 +96,7 @@ RULES: list[Rule] = [
 ]
 
 # The observations each encoder takes, and the largest tree a tree planner may expand at every env step.
-ENCODER_OBS = {"conv": "pixels", "mlp": "state"}
+ENCODER_OBS = {"conv": "pixels", "conv_with_random": "pixels", "mlp": "state"}
 MAX_TREE_LEAVES = 3**10
 CPU_ONLY_BASELINES = ("icm", "rnd")  # the Q agent's intrinsic rewards keep their networks on the CPU
 
@@ -132,6 +132,10 @@ def _cross_field_errors(cfg: DictConfig) -> list[str]:
     elif choice(cfg.agent.q_intrinsic) == "relabel" and cfg.planner.name != "qtree":
         errors.append(f"agent.q_intrinsic=relabel: rescored rewards feed Q targets, and planner={cfg.planner.name} has no "
                       "Q; allowed: agent.q_intrinsic=batch, or planner=qtree")  # fmt: skip
+    random_dim = OmegaConf.select(cfg, "encoder.random_dim", default=None)
+    if random_dim is not None and not 1 <= random_dim < cfg.agent.internal_dim:
+        errors.append(f"encoder.random_dim={random_dim}: must be >= 1 and < agent.internal_dim={cfg.agent.internal_dim} "
+                      "(the learned part keeps at least one dimension)")  # fmt: skip
     if cfg.budget.warmup_steps < cfg.agent.n_step:
         errors.append(f"budget.warmup_steps={cfg.budget.warmup_steps}: must be >= agent.n_step={cfg.agent.n_step} "
                       "(segments to sample)")  # fmt: skip

@@ -141,3 +141,49 @@ class MLPEncoder(nn.Module):
             (B, d) latents.
         """
         return self.net(obs.flatten(start_dim=1))
+
+
+class ConvWithRandomFeatures(nn.Module):
+    """A trained :class:`ConvEncoder` beside a frozen random one: s = [E_φ(o), E_rand(o)] ∈ R^d.
+
+    The first ``latent_dim − random_dim`` coordinates are learned (every loss trains them, as for ``encoder=conv``);
+    the last ``random_dim`` come from a second conv encoder that keeps its random initial weights
+    (``frozen=True``), by default on blurred frame differences, whose geometry follows the velocity
+    (``analysis.encoder_geometry``). Both parts are one latent for the transition model, the novelty and planning.
+
+    Args:
+        in_channels: number of stacked frames C.
+        latent_dim: d, the whole latent's size (learned + random).
+        random_dim: the random part's size, 1 <= random_dim < d.
+        frame_size: side of the square frames.
+        blur_sigma, differences, difference_gain: the learned part's input (as :class:`ConvEncoder`).
+        frozen: also keep the learned part's initial weights (as :class:`ConvEncoder`).
+        random_blur_sigma, random_differences: the random part's input.
+        channels_last: as :class:`ConvEncoder`.
+    """
+
+    def __init__(
+        self,
+        in_channels: int = 4,
+        latent_dim: int = 8,
+        random_dim: int = 4,
+        frame_size: int = 32,
+        blur_sigma: float = 0.0,
+        differences: bool = False,
+        difference_gain: float = 1.0,
+        frozen: bool = False,
+        random_blur_sigma: float = 4.0,
+        random_differences: bool = True,
+        channels_last: bool = True,
+    ) -> None:
+        super().__init__()
+        if not 1 <= random_dim < latent_dim:
+            raise ValueError(f"random_dim must be in [1, latent_dim), got {random_dim} with latent_dim={latent_dim}")
+        self.learned = ConvEncoder(in_channels, latent_dim - random_dim, channels_last, frame_size, blur_sigma,
+                                   differences, difference_gain, frozen)  # fmt: skip
+        self.random = ConvEncoder(in_channels, random_dim, channels_last, frame_size, random_blur_sigma,
+                                  random_differences, frozen=True)  # fmt: skip
+
+    def forward(self, obs: Tensor) -> Tensor:
+        """(B, C, H, W) float observations -> (B, d) latents [learned (B, d − random_dim), random (B, random_dim)]."""
+        return torch.cat([self.learned(obs), self.random(obs)], dim=1)
