@@ -6,6 +6,7 @@ import itertools
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 import torch
 
@@ -287,3 +288,18 @@ def test_conv_with_random_features_trains_its_learned_part_only() -> None:
     after = agent.model.encoder.state_dict()
     assert all(torch.equal(before[k], after[k]) for k in before if k.startswith("random."))
     assert all(not torch.equal(before[k], after[k]) for k in before if k.startswith("learned.") and "weight" in k)
+
+
+def test_a_frozen_encoder_is_standardised_at_the_first_training_call(tmp_path: Path) -> None:
+    enc = build(compose_cfg(["encoder.frozen=true", "encoder.blur_sigma=4"]).encoder)
+    obs = torch.rand(64, 4, 32, 32)
+    assert bool((enc(obs).std(0) < 0.1).all())  # uncalibrated, a random encoder's outputs are small
+    enc.calibrate(obs)
+    z = enc(obs)
+    assert torch.allclose(z.mean(0), torch.zeros(4), atol=1e-4)  # float32 rounding only
+    assert torch.allclose(z.std(0, correction=0), torch.ones(4), atol=1e-3)
+    # in a run: the first training call calibrates, so the next latents' log-det leaves the floor log(1e-3) * d
+    run(compose_cfg([*FAST, "encoder.frozen=true", "budget.max_steps=60", "budget.warmup_steps=40", "log_every=5"]),
+        tmp_path / "run")  # fmt: skip
+    logdet = [float(v) for v in pd.read_csv(tmp_path / "run" / "metrics.csv")["info/latent_logdet"].dropna()]
+    assert logdet and min(logdet) > -10.0

@@ -28,6 +28,7 @@ from curiosity.agents.representation import (
 from curiosity.agents.schedule import TrainSchedule
 from curiosity.agents.updates import Q_GRAD_CLAMP, build_optimizers, load_optimizers_state, optimizers_state, step
 from curiosity.agents.world_model import WorldModel
+from curiosity.nets.encoders import FixedStandardiser
 from curiosity.config.build import build, choice
 from curiosity.envs.simulator import Simulator, SimStates
 from curiosity.intrinsic.base import IntrinsicContext
@@ -266,6 +267,8 @@ class PaperAgent(Agent):
         window: list[float] = []
         done = 0
         self._latent = None  # the encoder changes
+        if self.schedule.calls == 1:
+            self._calibrate()
         self.model.train()
         for done in range(1, iterations + 1):
             logs, eval_error = self._iteration()
@@ -281,6 +284,17 @@ class PaperAgent(Agent):
             self._relabel()
         out.update({"train/iterations": float(done), "timing/train_ms": 1e3 * (time.perf_counter() - start)})
         return out
+
+    def _calibrate(self) -> None:
+        """At the first training call a frozen encoder standardises its outputs by the warm-up's observations
+        (``encoder.frozen``, the random part of ``encoder=conv_with_random``; trained encoders do nothing) and the
+        novelty memory is re-embedded with it."""
+        encoder = self.model.encoder
+        if not any(isinstance(m, FixedStandardiser) for m in encoder.modules()):
+            return
+        encoder.calibrate(self.replay.all_obs().to(self.device))
+        if self.novelty is not None and self.novelty.ready:
+            self.novelty.refresh()
 
     def _relabel(self) -> None:
         assert self.relabelled is not None

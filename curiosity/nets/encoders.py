@@ -34,6 +34,31 @@ def tanh_mlp(sizes: Sequence[int], *, final_activation: bool = False, dropout: f
     return nn.Sequential(*layers)
 
 
+class FixedStandardiser(nn.Module):
+    """y = (x − shift) / scale per coordinate, with (shift, scale) set once by :meth:`calibrate` (identity before).
+
+    A frozen random encoder's latents keep the scale of its initialisation (on Acrobot's frames a standard deviation
+    of ~0.005: ``info/latent_logdet`` at its floor), too small for the transition model and the dispersion term; its
+    outputs are standardised with the statistics of the warm-up's observations (as RND normalises its features).
+    The two buffers are in the state dict, so a resumed run keeps the calibration.
+    """
+
+    def __init__(self, dim: int) -> None:
+        super().__init__()
+        self.register_buffer("shift", torch.zeros(dim))
+        self.register_buffer("scale", torch.ones(dim))
+
+    def forward(self, x: Tensor) -> Tensor:
+        """(B, dim) -> (B, dim)."""
+        return (x - self.shift) / self.scale
+
+    @torch.no_grad()
+    def calibrate(self, raw: Tensor) -> None:
+        """Set shift and scale to the mean and standard deviation of ``raw`` (N, dim) (scale floored at 1e-8)."""
+        self.shift.copy_(raw.mean(0))
+        self.scale.copy_(raw.std(0, correction=0).clamp_min(1e-8))
+
+
 class ConvEncoder(nn.Module):
     """NSRS's ``ImageEncoder`` for stacked 4×32×32 frames (nsrs-protocol.md §3.2).
 
@@ -60,7 +85,8 @@ class ConvEncoder(nn.Module):
             frames (:class:`~curiosity.nets.preprocess.FrameDifferences`); False (NSRS): the frames.
         difference_gain: factor on those differences.
         frozen: keep the initial (random) weights: no parameter takes a gradient, so no loss trains the encoder and
-            its latents never move (a fixed random-feature encoder, as in random-feature curiosity).
+            its latents never move (a fixed random-feature encoder, as in random-feature curiosity); its outputs are
+            standardised once :meth:`calibrate` has seen observations (:class:`FixedStandardiser`).
     """
 
     def __init__(
@@ -99,6 +125,7 @@ class ConvEncoder(nn.Module):
         if channels_last:
             self.features.to(memory_format=torch.channels_last)
         self.requires_grad_(not frozen)
+        self.standardise = FixedStandardiser(latent_dim) if frozen else None  # trained encoders: checkpoints unchanged
 
     def forward(self, obs: Tensor) -> Tensor:
         """Encode observations.
@@ -109,10 +136,20 @@ class ConvEncoder(nn.Module):
         Returns:
             (B, d) latents s = E(o).
         """
+        z = self._raw(obs)
+        return z if self.standardise is None else self.standardise(z)
+
+    def _raw(self, obs: Tensor) -> Tensor:
         obs = self.preprocess(obs)
         if self.channels_last:
             obs = obs.contiguous(memory_format=torch.channels_last)
         return self.head(self.features(obs))
+
+    @torch.no_grad()
+    def calibrate(self, obs: Tensor) -> None:
+        """A frozen encoder standardises its outputs by their statistics on ``obs`` (N, C, H, W); otherwise nothing."""
+        if self.standardise is not None:
+            self.standardise.calibrate(self._raw(obs))
 
 
 class MLPEncoder(nn.Module):
@@ -122,7 +159,8 @@ class MLPEncoder(nn.Module):
         in_dim: flattened observation size.
         latent_dim: d.
         hidden: hidden widths.
-        frozen: keep the initial (random) weights (as :class:`ConvEncoder`).
+        frozen: keep the initial (random) weights, outputs standardised after :meth:`calibrate` (as
+            :class:`ConvEncoder`).
     """
 
     def __init__(self, in_dim: int, latent_dim: int = 4, hidden: Sequence[int] = (200, 100, 50, 10),
@@ -130,6 +168,7 @@ class MLPEncoder(nn.Module):
         super().__init__()
         self.net = tanh_mlp([in_dim, *hidden, latent_dim])
         self.requires_grad_(not frozen)
+        self.standardise = FixedStandardiser(latent_dim) if frozen else None
 
     def forward(self, obs: Tensor) -> Tensor:
         """Encode observations.
@@ -140,7 +179,14 @@ class MLPEncoder(nn.Module):
         Returns:
             (B, d) latents.
         """
-        return self.net(obs.flatten(start_dim=1))
+        z = self.net(obs.flatten(start_dim=1))
+        return z if self.standardise is None else self.standardise(z)
+
+    @torch.no_grad()
+    def calibrate(self, obs: Tensor) -> None:
+        """A frozen encoder standardises its outputs by their statistics on ``obs`` (N, *obs_shape); otherwise nothing."""
+        if self.standardise is not None:
+            self.standardise.calibrate(self.net(obs.flatten(start_dim=1)))
 
 
 class ConvWithRandomFeatures(nn.Module):
@@ -187,3 +233,9 @@ class ConvWithRandomFeatures(nn.Module):
     def forward(self, obs: Tensor) -> Tensor:
         """(B, C, H, W) float observations -> (B, d) latents [learned (B, d − random_dim), random (B, random_dim)]."""
         return torch.cat([self.learned(obs), self.random(obs)], dim=1)
+
+    @torch.no_grad()
+    def calibrate(self, obs: Tensor) -> None:
+        """Standardise the random part's outputs (and a frozen learned part's) by their statistics on ``obs``."""
+        self.learned.calibrate(obs)
+        self.random.calibrate(obs)
