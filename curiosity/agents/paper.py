@@ -28,13 +28,13 @@ from curiosity.agents.representation import (
 from curiosity.agents.schedule import TrainSchedule
 from curiosity.agents.updates import Q_GRAD_CLAMP, build_optimizers, load_optimizers_state, optimizers_state, step
 from curiosity.agents.world_model import WorldModel
-from curiosity.nets.encoders import FixedStandardiser
 from curiosity.config.build import build, choice
 from curiosity.envs.simulator import Simulator, SimStates
 from curiosity.intrinsic.base import IntrinsicContext
 from curiosity.intrinsic.latent_novelty import LatentNovelty
 from curiosity.intrinsic.mixture import Mixture
 from curiosity.nets.backward import BackwardPredictor
+from curiosity.nets.encoders import FixedStandardiser
 from curiosity.nets.reward import RewardModel
 from curiosity.nets.transition import ResidualTransition, TransitionEnsemble
 from curiosity.planning.mpc import MPCPlanner
