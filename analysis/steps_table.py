@@ -101,6 +101,28 @@ def steps_table(summaries: pd.DataFrame, by: tuple[str, ...] = BY, incomplete: p
     return pd.DataFrame(rows)
 
 
+def pooled_commits(summaries: pd.DataFrame, by: tuple[str, ...] = BY) -> list[str]:
+    """One line per group of ``by`` whose finished runs were made by more than one code commit (``git_commit`` of
+    their summaries, ``+dirty`` where the tree had uncommitted changes): the same config run by other code may not be
+    the same method, so a reader should know a row pools them. Groups of one commit, and runs that recorded none, give
+    no line."""
+    if summaries.empty or "git_commit" not in summaries:
+        return []
+    if by == BY:
+        summaries, _ = split_code_defaults(summaries)
+    f = summaries[summaries["git_commit"].notna()].copy()
+    dirty = f["git_dirty"].fillna(False).astype(bool) if "git_dirty" in f else pd.Series(False, index=f.index)
+    f["code"] = f["git_commit"].astype(str).str[:7] + dirty.map({True: "+dirty", False: ""})
+    lines = []
+    for key, g in f.groupby(list(by), sort=True):
+        counts = g["code"].value_counts(sort=False).sort_index()
+        if len(counts) > 1:
+            name = " ".join(str(k) for k in (key if isinstance(key, tuple) else (key,)))
+            made = ", ".join(f"{c} ({n} run{'s' if n > 1 else ''})" for c, n in counts.items())
+            lines.append(f"{name}: pools runs of {len(counts)} code commits: {made}")
+    return lines
+
+
 def to_markdown(table: pd.DataFrame) -> str:
     """The README's table: method, command, seeds reaching the goal, steps-to-goal per seed, mean ± SE (over the runs
     that reached the goal, and where some did not, also the mean with those counted at the cap)."""
@@ -129,6 +151,8 @@ def main() -> None:
     if not summaries.empty:
         table = steps_table(summaries, incomplete=incomplete)
         print(to_markdown(table) if args.markdown else table.to_string(index=False))
+        for line in pooled_commits(summaries):  # on stderr: the table on stdout stays what the README quotes
+            print(f"warning: {line}", file=sys.stderr)
     if not incomplete.empty:
         print(f"\nNot finished (no summary.json), not in the table's statistics: {len(incomplete)} run(s)")
         for row in incomplete.itertuples(index=False):

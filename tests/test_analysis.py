@@ -100,6 +100,23 @@ def test_steps_table_splits_one_command_run_with_other_code_defaults(sweep: Path
            "| 1 / 1 | 1855 |" in res.stdout
 
 
+def test_steps_table_warns_on_stderr_when_a_row_pools_runs_of_other_code_commits(sweep: Path) -> None:
+    """Seed 1 of the mpc row recorded another commit: stdout (the README's table) is unchanged, stderr names the row
+    and both commits with their run counts; with every run of one commit there is no warning."""
+    before = analysis("steps_table", sweep, "--markdown")
+    assert before.returncode == 0 and "pools runs" not in before.stderr
+    summary = next(p for p in sweep.rglob("seed=1/summary.json") if "mpc" in str(p))
+    data = json.loads(summary.read_text())
+    old = data["git_commit"][:7]
+    data["git_commit"] = "f" * 40
+    summary.write_text(json.dumps(data))
+    res = analysis("steps_table", sweep, "--markdown")
+    assert res.returncode == 0 and res.stdout == before.stdout
+    warning = [line for line in res.stderr.splitlines() if "pools runs of 2 code commits" in line]
+    assert len(warning) == 1 and warning[0].startswith("warning: ") and "mpc" in warning[0]
+    assert f"{old} (2 runs)" in warning[0] and "fffffff (1 run)" in warning[0]
+
+
 def test_profile_of_a_sweep_root_profiles_each_run_finished_or_not(sweep: Path) -> None:
     res = analysis("profile", sweep)
     assert res.returncode == 0, res.stderr
