@@ -56,9 +56,20 @@ def _flat_config(path: Path, mtime_ns: int, size: int) -> dict[str, object]:
     return flat
 
 
+def code_commit(summary: dict) -> str:
+    """The commit a run's ``summary.json`` records, shortened to 7 characters, ``+dirty`` where the working tree had
+    uncommitted changes; ``""`` where it records none."""
+    commit = summary.get("git_commit")
+    if not commit:
+        return ""
+    return str(commit)[:7] + ("+dirty" if summary.get("git_dirty") else "")
+
+
 def load_runs(root: str | Path) -> pd.DataFrame:
     """One row per finished run below ``root``: env, method, seed, steps-to-goal, its value with a censored run at its
-    last step (``steps``), ``censored``, ``cap``, the run's flat config under ``config`` and ``run_dir``."""
+    last step (``steps``), ``censored``, ``cap``, the code commit that made it (``code``: ``git_commit``'s first 7
+    characters, ``+dirty`` where the tree had uncommitted changes; empty where the summary recorded none), the run's
+    flat config under ``config`` and ``run_dir``."""
     rows = []
     for d in run_dirs(root):
         summary = json.loads((d / "summary.json").read_text())
@@ -71,7 +82,7 @@ def load_runs(root: str | Path) -> pd.DataFrame:
             "seed": int(summary["seed"]),
             "reached": reached, "steps": float(summary["steps_to_goal"]) if reached else float(last),
             "censored": not reached, "cap": cap, "wall_seconds": float(summary.get("wall_seconds", float("nan"))),
-            "config": cfg, "run_dir": str(d),
+            "code": code_commit(summary), "config": cfg, "run_dir": str(d),
         })  # fmt: skip
     return pd.DataFrame(rows)
 

@@ -5,7 +5,8 @@ writes ``steps_to_goal.{md,tex,csv}`` and ``incomplete.csv`` to DIR (default ``R
 method as its config defines it (``analysis.rows``): seeds, successes, every seed's value (a censored run as ``>cap``),
 mean ± SE with censored runs at their last step (the paper's Table 2 rule) and over successes only, median, IQM with
 a stratified-bootstrap 95 % CI, Welch's t-test p against the reference row, and the published number beside ours
-(``analysis/paper_numbers.yaml``). Runs without ``summary.json`` are listed apart, never dropped silently. Where runs
+(``analysis/paper_numbers.yaml``); below it the compute the runs took and the code commits that made them, naming
+every row that pools runs of more than one. Runs without ``summary.json`` are listed apart, never dropped silently. Where runs
 have a noisy TV, ``distractor.{md,csv}`` set each method with the TV beside itself without (``analysis.distractor``).
 """
 
@@ -113,12 +114,39 @@ def compute_line(runs: pd.DataFrame) -> str:
             f"shared the cores count their own, longer, time): {'; '.join(parts)}.")
 
 
-def to_markdown(table: pd.DataFrame, incomplete: pd.DataFrame, reference: str, compute: str = "") -> str:
-    """The table, its note, the compute the runs took and the runs not finished, as one Markdown document."""
+def code_line(runs: pd.DataFrame) -> str:
+    """Which code commits made the finished runs (``code`` of :func:`analysis.rows.load_runs`), and every row (``row``,
+    per env) whose runs were made by more than one: the same config run by other code may not be the same method, so a
+    reader should know where a row pools them. ``""`` where no run recorded its commit."""
+    if runs.empty or "code" not in runs:
+        return ""
+    made = runs[runs["code"].astype(bool)]
+    if made.empty:
+        return ""
+    commits = made.drop_duplicates("run_dir")["code"].value_counts().sort_index()
+    if len(commits) == 1:
+        return f"Code: every run was made by commit `{commits.index[0]}` (`summary.json`'s `git_commit`)."
+    listed = ", ".join(f"`{c}` ({n} run{'s' if n > 1 else ''})" for c, n in commits.items())
+    pooled = []
+    for (env, row), g in made.groupby(["env", "row"], sort=True):
+        counts = g["code"].value_counts().sort_index()
+        if len(counts) > 1:
+            pooled.append(f"- {env} {row}: " + ", ".join(f"`{c}` ({n})" for c, n in counts.items()))
+    text = f"Code: the runs were made by {len(commits)} commits (`summary.json`'s `git_commit`): {listed}."
+    if not pooled:
+        return text + " Each row's runs share one commit."
+    return "\n".join([text + " Rows pooling runs of more than one commit:", "", *pooled])
+
+
+def to_markdown(table: pd.DataFrame, incomplete: pd.DataFrame, reference: str, compute: str = "",
+                code: str = "") -> str:  # fmt: skip
+    """The table, its note, the compute the runs took, the code that made them and the runs not finished, as one
+    Markdown document."""
     lines = ["| " + " | ".join(HEADER) + " |", "|" + "---|" * len(HEADER)]
     lines += ["| " + " | ".join(c.replace("|", "\\|") for c in _cells(r)) + " |" for r in table.itertuples(index=False)]
     lines += ["", NOTE.format(reference=reference), ""]
     lines += [compute, ""] if compute else []
+    lines += [code, ""] if code else []
     if incomplete.empty:
         lines.append("Every run below the directory finished (has `summary.json`).")
     else:
@@ -156,10 +184,10 @@ def write_tables(root: Path, out: Path, reference: str = DEFAULT_REFERENCE, grou
     incomplete = _relative(load_incomplete(root), root)
     if runs.empty and incomplete.empty:
         raise FileNotFoundError(f"no run directory below {root}")
-    table = steps_table(pool_rows(label_rows(runs, group_by), pools), reference, paper_numbers()) if not runs.empty \
-        else pd.DataFrame(columns=["env", "row"])  # fmt: skip
+    rows = pool_rows(label_rows(runs, group_by), pools) if not runs.empty else runs
+    table = steps_table(rows, reference, paper_numbers()) if not runs.empty else pd.DataFrame(columns=["env", "row"])
     out.mkdir(parents=True, exist_ok=True)
-    (out / "steps_to_goal.md").write_text(to_markdown(table, incomplete, reference, compute_line(runs)))
+    (out / "steps_to_goal.md").write_text(to_markdown(table, incomplete, reference, compute_line(runs), code_line(rows)))
     (out / "steps_to_goal.tex").write_text(to_latex(table))
     table.to_csv(out / "steps_to_goal.csv", index=False, float_format="%.6g", lineterminator="\n")
     cols = ["env", "method", "seed", "status", "detail", "run_dir"]

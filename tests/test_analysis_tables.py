@@ -181,3 +181,29 @@ def test_no_distractor_no_tv_table_and_no_tv_figure(tmp_path: Path) -> None:
     write_tables(tmp_path, tmp_path / "report")
     assert not (tmp_path / "report" / "distractor.md").exists()
     assert not any(p.stem == "tv_presses" for p in write_figures(tmp_path, tmp_path / "report"))
+
+
+def test_the_report_names_the_code_commits_and_each_row_that_pools_several(tmp_path: Path) -> None:
+    """Runs that recorded no commit give no line; all of one commit, one line naming it; a run of another commit
+    names the row it falls in (with its run counts) and no other row."""
+    import json
+
+    root = make_runs(tmp_path / "runs")
+    write_tables(root, tmp_path / "none")
+    assert "Code:" not in (tmp_path / "none" / "steps_to_goal.md").read_text()
+    summaries = sorted(root.rglob("summary.json"))
+    for s in summaries:
+        s.write_text(json.dumps({**json.loads(s.read_text()), "git_commit": "a" * 40, "git_dirty": False}))
+    write_tables(root, tmp_path / "one")
+    md = (tmp_path / "one" / "steps_to_goal.md").read_text()
+    assert "Code: every run was made by commit `aaaaaaa`" in md and "pooling" not in md
+    other = next(s for s in summaries if json.loads(s.read_text())["method"] == "random")
+    other.write_text(json.dumps({**json.loads(other.read_text()), "git_commit": "b" * 40, "git_dirty": True}))
+    write_tables(root, tmp_path / "two")
+    text = (tmp_path / "two" / "steps_to_goal.md").read_text()
+    line = next(x for x in text.splitlines() if x.startswith("Code:"))
+    n = len(summaries)
+    assert "by 2 commits" in line and f"`aaaaaaa` ({n - 1} runs)" in line and "`bbbbbbb+dirty` (1 run)" in line
+    assert line.endswith("Rows pooling runs of more than one commit:")
+    pooled = [x for x in text.split(line)[1].split("Not finished")[0].splitlines() if x.startswith("- ")]
+    assert len(pooled) == 1 and "random" in pooled[0] and pooled[0].endswith("`aaaaaaa` (1), `bbbbbbb+dirty` (1)")
