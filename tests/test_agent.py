@@ -81,19 +81,21 @@ def _context(model: WorldModel, replay: ReplayBuffer, warmup_steps: int) -> Intr
                             encode=encode, model=model)  # fmt: skip
 
 
-def _novelty(novelty_input: str) -> LatentNovelty:
+def _novelty(novelty_input: str, standardise: bool = False, motion_scale: float = 1.0) -> LatentNovelty:
     cfg = compose_cfg(["env.obs=state", "encoder=mlp"])
     model = build_world_model(cfg)
     replay = ReplayBuffer(100, (6,))
     cur = LatentNovelty(KNNNovelty(k=1, normalise=False), EmbeddingMemory(), _context(model, replay, 4),
-                        input=novelty_input, action_scale=2.0, standardise=False)  # fmt: skip
+                        input=novelty_input, action_scale=2.0, motion_scale=motion_scale,
+                        standardise=standardise)  # fmt: skip
     rng = np.random.default_rng(0)
     obs = rng.normal(size=6).astype(np.float32)
     for t in range(8):
         nxt = rng.normal(size=6).astype(np.float32)
         replay.add(obs, t % 3, -1.0, nxt, False)
         with torch.no_grad():
-            cur.add(model.encode(torch.as_tensor(obs).unsqueeze(0))[0], t % 3, t)
+            z, z_next = model.encode(torch.as_tensor(np.stack([obs, nxt])))
+        cur.add(z, t % 3, t, z_next if novelty_input == "state_motion" else None)
         obs = nxt
     cur.refresh()
     return cur
@@ -116,6 +118,50 @@ def test_state_novelty_scores_the_state_reached() -> None:
     cur = _novelty("state")
     z = cur.memory.tensor()
     assert float(cur.novelty(z[:1] + 100.0, torch.tensor([0]), z[:1])) == pytest.approx(0.0, abs=1e-6)
+
+
+def test_state_motion_novelty_scores_the_state_reached_and_the_latent_motion_into_it() -> None:
+    """Rows [s', m·(s' − s)] re-encoded at the refresh from the replay's o_t and o_{t+1}; a stored transition scores 0
+    (k = 1), the same state reached with another motion scores its distance; without s the embedding is refused."""
+    cur = _novelty("state_motion", motion_scale=3.0)
+    y = cur.memory.tensor()
+    with torch.no_grad():
+        z = cur.encode(cur.replay.obs_at(np.arange(8)))
+        z_next = cur.encode(cur.replay.transitions_at(np.arange(8)).next_obs)
+    d = z.shape[1]
+    assert y.shape == (8, 2 * d)
+    torch.testing.assert_close(y, torch.cat([z_next, 3.0 * (z_next - z)], dim=1))  # batch shapes differ: tolerance
+    a = torch.tensor([0])
+    assert float(cur.novelty(z[:1], a, z_next[:1])) == pytest.approx(0.0, abs=1e-5)
+    query = torch.cat([z_next[:1], 3.0 * (z_next[:1] - z[:1] - 1.0)], dim=1)  # the same s', another motion
+    expected = (y - query).norm(dim=1).min()
+    assert float(cur.novelty(z[:1] + 1.0, a, z_next[:1])) == pytest.approx(float(expected), rel=1e-4) and expected > 0
+    with pytest.raises(ValueError, match="z_next"):
+        cur.embed(z, torch.zeros(8, dtype=torch.long))
+
+
+def test_state_motion_standardises_its_two_parts_apart_and_checkpoints_their_statistics() -> None:
+    cur = _novelty("state_motion", standardise=True, motion_scale=2.0)
+    y = cur.memory.tensor()
+    d = y.shape[1] // 2
+    torch.testing.assert_close(y[:, :d].mean(0), torch.zeros(d), atol=1e-5, rtol=0)
+    torch.testing.assert_close(y[:, :d].std(0, correction=0), torch.ones(d), atol=1e-4, rtol=0)
+    torch.testing.assert_close(y[:, d:].std(0, correction=0), torch.full((d,), 2.0), atol=1e-4, rtol=0)
+    twin = _novelty("state_motion", standardise=True, motion_scale=2.0)
+    twin.m_mean = twin.m_std = None
+    twin.load_state_dict(cur.state_dict())
+    assert torch.equal(twin.m_mean, cur.m_mean) and torch.equal(twin.m_std, cur.m_std)
+    old = {k: v for k, v in cur.state_dict().items() if k not in ("m_mean", "m_std")}  # a checkpoint from before
+    twin.load_state_dict(old)
+    assert twin.m_mean is None
+
+
+def test_a_run_with_state_motion_novelty_runs(tmp_path: Path) -> None:
+    summary = run(compose_cfg([*FAST, "intrinsic.terms.novelty.input=state_motion"]), tmp_path)
+    assert summary.env_steps == 80
+    header = (tmp_path / "metrics.csv").read_text().splitlines()[0].split(",")
+    last = dict(zip(header, (tmp_path / "metrics.csv").read_text().splitlines()[-1].split(","), strict=True))
+    assert last["intrinsic/reward"] != "" and np.isfinite(float(last["intrinsic/reward"]))
 
 
 def test_prediction_error_bonus_is_used_before_it_is_updated() -> None:

@@ -46,6 +46,7 @@ class Device(Enum):
 class NoveltyInput(Enum):
     state_action = "state_action"
     state = "state"
+    state_motion = "state_motion"
 
 
 class PEImagined(Enum):
@@ -301,7 +302,9 @@ class LatentNoveltyTermConfig:
     _target_: str = "curiosity.intrinsic.latent_novelty.LatentNovelty.from_context"
     estimator: Any = "${estimator}"  # the estimator group
     input: NoveltyInput = NoveltyInput.state  # state: the state reached (measured better here) | state_action (the text)
+    # | state_motion: the state reached and the latent's one-step motion into it
     action_scale: float = 1.0  # c, length of the action part of y (state_action), in latent standard deviations
+    motion_scale: float = 1.0  # m, weight of the motion part of state_motion, in motion standard deviations
     standardise: bool = True  # standardise latents per dimension by the memory's statistics at each refresh
     memory_mode: MemoryMode = MemoryMode.exact  # exact (every pair) | reservoir (a uniform sample of memory_size)
     memory_size: int = 100_000

@@ -5,9 +5,13 @@ Input (``input``):
     ``state_action`` (paper text): memory rows y_t = [s_t, c·onehot(a_t)], an edge (s, a, s') is scored by
     novelty(y) with y = [s, c·onehot(a)]; c = ``action_scale`` sets how far apart actions are (method.md §9).
     ``state`` (precursor code, NSRS): memory rows s_t; an edge is scored by the novelty of the state reached, s'.
+    ``state_motion`` (ours, off by default): memory rows [s_{t+1}, m·(s_{t+1} − s_t)], the state each transition reached
+    and the latent's one-step motion into it; an edge (s, a, s') is scored by novelty([s', m·(s' − s)]). A latent that
+    codes the pose but not the velocity (the trained pixel encoder, ``analysis.encoder_geometry``) then still tells a
+    fast swing from a slow one through its motion; m = ``motion_scale``, in motion standard deviations.
 With ``standardise=True`` the latent part is standardised per dimension by the memory's mean and standard deviation
-at the last refresh, so the bandwidth and ``action_scale`` are in units of the latent spread, which drifts while the
-encoder trains.
+at the last refresh (the motion part of ``state_motion`` by its own), so the bandwidth, ``action_scale`` and
+``motion_scale`` are in units of the latent spread, which drifts while the encoder trains.
 
 The memory holds one row per real transition (keyed by its global replay index). The encoder keeps changing, so the
 memory is re-embedded from the replay's observations (a *refresh*) every ``refresh_every`` env steps from the end of
@@ -31,7 +35,7 @@ from curiosity.novelty.memory import EmbeddingMemory
 from curiosity.novelty.protocols import NoveltyEstimator
 from curiosity.types import TransitionBatch
 
-INPUTS = ("state_action", "state")
+INPUTS = ("state_action", "state", "state_motion")
 MEMORY_KEYS = ("intrinsic/memory_size", "memory/drift", "memory/refreshed", "timing/refresh_ms")
 
 
@@ -42,8 +46,9 @@ class LatentNovelty(IntrinsicReward):
         estimator: the novelty estimator (fitted at each refresh).
         memory: the embedding memory (exact or reservoir).
         context: the agent's parts; ``replay`` and ``encode`` are required (refreshes re-encode stored observations).
-        input: ``state_action`` or ``state``.
-        action_scale: c, the length of the action part of y.
+        input: ``state_action``, ``state`` or ``state_motion``.
+        action_scale: c, the length of the action part of y (``state_action``).
+        motion_scale: m, the weight of the standardised motion part (``state_motion``).
         standardise: standardise latents per dimension by the memory's statistics at each refresh.
         refresh_every: env steps between refreshes, counted from the end of the warm-up.
         refresh_drift: also refresh whenever :meth:`drift` exceeds this (standardised units); 0: off.
@@ -57,8 +62,8 @@ class LatentNovelty(IntrinsicReward):
         return True
 
     def __init__(self, estimator: NoveltyEstimator, memory: EmbeddingMemory, context: IntrinsicContext, *,
-                 input: str = "state", action_scale: float = 1.0, standardise: bool = True, refresh_every: int = 10,
-                 refresh_drift: float = 0.0, scale: float = 1.0) -> None:  # fmt: skip
+                 input: str = "state", action_scale: float = 1.0, motion_scale: float = 1.0, standardise: bool = True,
+                 refresh_every: int = 10, refresh_drift: float = 0.0, scale: float = 1.0) -> None:  # fmt: skip
         super().__init__(scale)
         if input not in INPUTS:
             raise ValueError(f"novelty input must be one of {INPUTS}, got {input!r}")
@@ -67,9 +72,12 @@ class LatentNovelty(IntrinsicReward):
         self.estimator, self.memory, self.replay, self.encode = estimator, memory, context.replay, context.encode
         self.n_actions, self.warmup_steps, self.device = context.n_actions, context.warmup_steps, context.device
         self.input, self.action_scale, self.standardise = input, float(action_scale), bool(standardise)
+        self.motion_scale = float(motion_scale)
         self.refresh_every, self.refresh_drift = int(refresh_every), float(refresh_drift)
         self.z_mean: Tensor | None = None
         self.z_std: Tensor | None = None
+        self.m_mean: Tensor | None = None  # the motion part's statistics (state_motion)
+        self.m_std: Tensor | None = None
         self._ready = False
         self.log_keys = (*MEMORY_KEYS, *estimator.log_keys)
 
@@ -96,21 +104,46 @@ class LatentNovelty(IntrinsicReward):
             return z
         return (z - self.z_mean) / self.z_std
 
-    def embed(self, z: Tensor, a: Tensor) -> Tensor:
-        """Memory/query embedding of pairs: z (N, d), a (N,) long -> (N, d + A) or (N, d)."""
+    def _motion(self, z: Tensor, z_next: Tensor) -> Tensor:
+        """The standardised, weighted motion part m·(s' − s) of ``state_motion``: (N, d), (N, d) -> (N, d)."""
+        motion = z_next - z
+        if self.m_mean is not None and self.m_std is not None:
+            motion = (motion - self.m_mean) / self.m_std
+        return self.motion_scale * motion
+
+    def embed(self, z: Tensor, a: Tensor, z_next: Tensor | None = None) -> Tensor:
+        """Memory/query embedding of transitions: z (N, d) the latent of o_t, a (N,) long, z_next (N, d) the latent of
+        o_{t+1} (``state_motion`` only) -> (N, d + A) (``state_action``), (N, d) (``state``: of z) or (N, 2d)
+        (``state_motion``: [s', m·(s' − s)])."""
+        if self.input == "state_motion":
+            if z_next is None:
+                raise ValueError("novelty input state_motion embeds transitions: z_next (the latent of o_{t+1}) is needed")
+            return torch.cat([self._std(z_next), self._motion(z, z_next)], dim=1)
         z = self._std(z)
         if self.input == "state":
             return z
         return torch.cat([z, self.action_scale * one_hot(a, self.n_actions).to(z.dtype)], dim=1)
 
-    def _encode_stored(self, keys: np.ndarray) -> Tensor:
-        """Latents of stored transitions' o_t by global index, with the current encoder: (M,) -> (M, d)."""
-        parts = [self.encode(self.replay.obs_at(keys[i : i + 512]).to(self.device)) for i in range(0, len(keys), 512)]
+    def _encode_stored(self, keys: np.ndarray, next_obs: bool = False) -> Tensor:
+        """Latents of stored transitions' o_t (``next_obs``: o_{t+1}) by global index, with the current encoder:
+        (M,) -> (M, d)."""
+
+        def frames(k: np.ndarray) -> Tensor:
+            return self.replay.transitions_at(k).next_obs if next_obs else self.replay.obs_at(k)
+
+        parts = [self.encode(frames(keys[i : i + 512]).to(self.device)) for i in range(0, len(keys), 512)]
         return torch.cat(parts)
 
-    def add(self, z: Tensor, a: int, index: int) -> None:
-        """Store the embedding of the pair (s_t, a_t) of transition ``index`` (z: (d,) latent of o_t)."""
-        emb = self.embed(z.unsqueeze(0), torch.tensor([a], device=z.device))
+    def _embed_stored(self, keys: np.ndarray, z: Tensor) -> Tensor:
+        """The memory rows of stored transitions by global index, z (M, d) being the latents of their o_t."""
+        z_next = self._encode_stored(keys, next_obs=True) if self.input == "state_motion" else None
+        return self.embed(z, self.replay.actions_at(keys).to(z.device), z_next)
+
+    def add(self, z: Tensor, a: int, index: int, z_next: Tensor | None = None) -> None:
+        """Store the embedding of transition ``index`` (z: (d,) latent of o_t; z_next: (d,) of o_{t+1}, which
+        ``state_motion`` needs)."""
+        nxt = None if z_next is None else z_next.unsqueeze(0)
+        emb = self.embed(z.unsqueeze(0), torch.tensor([a], device=z.device), nxt)
         self.memory.add(emb, keys=torch.tensor([index], device="cpu"))
         if self._ready:
             self.estimator.set_memory(self.memory.tensor())
@@ -124,18 +157,22 @@ class LatentNovelty(IntrinsicReward):
         """
         keys = self.memory.keys().numpy()
         z = self._encode_stored(keys)
+        z_next = self._encode_stored(keys, next_obs=True) if self.input == "state_motion" else None
         if self.standardise:
-            self.z_mean, self.z_std = z.mean(0), z.std(0, correction=0).clamp_min(1e-8)
-        self.memory.replace(self.embed(z, self.replay.actions_at(keys).to(z.device)))
+            rows = z if z_next is None else z_next  # the states the rows hold
+            self.z_mean, self.z_std = rows.mean(0), rows.std(0, correction=0).clamp_min(1e-8)
+            if z_next is not None:
+                motion = z_next - z
+                self.m_mean, self.m_std = motion.mean(0), motion.std(0, correction=0).clamp_min(1e-8)
+        self.memory.replace(self.embed(z, self.replay.actions_at(keys).to(z.device), z_next))
         ref_keys = np.arange(min(self.warmup_steps, self.replay.total_added))
         reference = None
         if len(ref_keys) > 1:
             row = {int(k): i for i, k in enumerate(keys)}
             if all(int(k) in row for k in ref_keys):  # the random phase is in the memory: no second encoding
-                z_ref = z[[row[int(k)] for k in ref_keys]]
+                reference = self.memory.tensor()[[row[int(k)] for k in ref_keys]]
             else:  # a reservoir may have dropped some of it
-                z_ref = self._encode_stored(ref_keys)
-            reference = self.embed(z_ref, self.replay.actions_at(ref_keys).to(z.device))
+                reference = self._embed_stored(ref_keys, self._encode_stored(ref_keys))
         self.estimator.fit(self.memory.tensor(), reference, stream_size=self.memory.stands_for)
         self._ready = True
         return keys, z
@@ -146,8 +183,9 @@ class LatentNovelty(IntrinsicReward):
         memory rows (evenly spaced) and the embedding the current encoder gives their observations."""
         keys = self.memory.keys()
         index = torch.linspace(0, len(keys) - 1, min(rows, len(keys)), device="cpu").round().long()
-        now = self._std(self._encode_stored(keys[index].numpy()))
-        stored = self.memory.tensor()[index, : now.shape[1]]
+        chosen = keys[index].numpy()
+        now = self._embed_stored(chosen, self._encode_stored(chosen))  # the action part, if any, is the stored one
+        stored = self.memory.tensor()[index]
         return float((now - stored).norm(dim=1).median())
 
     def _refresh_due(self, step: int, logs: dict[str, float]) -> bool:
@@ -168,7 +206,7 @@ class LatentNovelty(IntrinsicReward):
         """Novelty of edges (z, a, z_next): (N, d), (N,), (N, d) -> (N,)."""
         if self.input == "state":
             return self.estimator(self._std(z_next))
-        return self.estimator(self.embed(z, a))
+        return self.estimator(self.embed(z, a, z_next))
 
     def compute(self, batch: TransitionBatch) -> Tensor:
         z, z_next = latents_of(batch, "latent novelty")
@@ -183,11 +221,11 @@ class LatentNovelty(IntrinsicReward):
 
     def observe(self, batch: TransitionBatch) -> dict[str, float]:
         """Add each fresh transition's (s_t, a_t) to the memory; refresh when due (see the module docstring)."""
-        z, _ = latents_of(batch, "latent novelty")
+        z, z_next = latents_of(batch, "latent novelty")
         if batch.index is None:
             raise ValueError("latent novelty keys its memory by transition index: the batch must carry index")
         for row, (a, index) in enumerate(zip(batch.act.tolist(), batch.index.tolist(), strict=True)):
-            self.add(z[row], int(a), int(index))
+            self.add(z[row], int(a), int(index), z_next[row] if self.input == "state_motion" else None)
         logs: dict[str, float] = {"intrinsic/memory_size": float(len(self.memory))} if self._ready else {}
         if self._refresh_due(int(batch.index[-1]), logs):
             start = time.perf_counter()
@@ -205,12 +243,13 @@ class LatentNovelty(IntrinsicReward):
 
     def state_dict(self) -> dict[str, Any]:
         return {"memory": self.memory.state_dict(), "ready": self._ready, "z_mean": self.z_mean, "z_std": self.z_std,
-                "estimator": self.estimator.state_dict()}  # fmt: skip
+                "m_mean": self.m_mean, "m_std": self.m_std, "estimator": self.estimator.state_dict()}  # fmt: skip
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
         self.memory.load_state_dict(state["memory"])
         self._ready = bool(state["ready"])
         self.z_mean, self.z_std = state["z_mean"], state["z_std"]
+        self.m_mean, self.m_std = state.get("m_mean"), state.get("m_std")  # checkpoints before state_motion had none
         if state["estimator"] is not None:
             self.estimator.load_state_dict(state["estimator"])
         if self._ready:
