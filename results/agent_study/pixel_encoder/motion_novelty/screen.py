@@ -1,0 +1,50 @@
+"""Offline screen (issue 11, a prototype, not an option): AUC (pumping vs random states) of KDE novelty on the standardised latent z', on [z', w dz]
+(dz = z' - z, each part standardised, the motion part weighted by w) and on dz alone; kernel 2x and 8x the median
+nearest-neighbour distance. Uses analysis.representation's data and agent."""
+import json, sys
+import numpy as np, torch
+from omegaconf import OmegaConf
+from analysis import representation as R
+from curiosity.config.build import build
+
+def score(cfg, bw, memory, queries, warmup):
+    mean, std = memory.mean(0), memory.std(0).clip(min=1e-8)
+    mem = torch.as_tensor((memory - mean) / std, dtype=torch.float32)
+    ec = OmegaConf.to_container(cfg.estimator, resolve=True); ec["bandwidth"] = bw
+    est = build(OmegaConf.create(ec))
+    est.fit(mem, mem[: max(2, min(warmup, len(mem)))])
+    return est(torch.as_tensor((queries - mean) / std, dtype=torch.float32)).double().numpy()
+
+def variants(z0, z1):
+    dz = z1 - z0
+    return {"z": z1, "z+dz": np.concatenate([z1, dz], 1), "dz": dz}
+
+def main(seed, data_seed, iters, out):
+    cfg = R.study_config([f"seed={seed}", "threads=1"])
+    torch.set_num_threads(1); torch.manual_seed(seed)
+    data = R.probe_sets(cfg, 600, 300, data_seed)
+    agent = R.agent_with_data(cfg, data.train)
+    w = int(cfg.budget.warmup_steps)
+    res = {"seed": seed, "data_seed": data_seed, "estimator": OmegaConf.to_container(cfg.estimator), "rows": []}
+    P = {k: getattr(data, k) for k in ("train", "random", "pumping")}
+    for bw in (2.0, 8.0):  # the reference: the same estimator on the physical state
+        nov = score(cfg, bw, P["train"].physical, np.concatenate([P["random"].physical, P["pumping"].physical]), w)
+        res[f"auc_physical_bw{bw:g}"] = round(R.auc(nov[300:], nov[:300]), 3)
+    done = 0
+    for target in iters:
+        agent.model.train()
+        for _ in range(target - done):
+            agent._iteration()
+        done = target
+        V = {k: variants(R._encode(agent, t.obs), R._encode(agent, t.next_obs)) for k, t in P.items()}
+        row = {"iters": done}
+        for v in V["train"]:
+            for bw in (2.0, 8.0):
+                nov = score(cfg, bw, V["train"][v], np.concatenate([V["random"][v], V["pumping"][v]]), w)
+                row[f"{v}_bw{bw:g}"] = round(R.auc(nov[300:], nov[:300]), 3)
+        res["rows"].append(row); print(row, flush=True)
+    print({k: v for k, v in res.items() if k.startswith("auc")})
+    json.dump(res, open(out, "w"), indent=1, default=str)
+
+if __name__ == "__main__":  # usage: screen.py MODEL_SEED DATA_SEED OUT.json
+    main(int(sys.argv[1]), int(sys.argv[2]), [0, 1000, 2000], sys.argv[3])
