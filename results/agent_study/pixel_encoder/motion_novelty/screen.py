@@ -1,8 +1,12 @@
-"""Offline screen (issue 11, a prototype, not an option): AUC (pumping vs random states) of KDE novelty on the standardised latent z', on [z', w dz]
-(dz = z' - z, each part standardised, the motion part weighted by w) and on dz alone; kernel 2x and 8x the median
-nearest-neighbour distance. Uses analysis.representation's data and agent."""
-import json, sys
-import numpy as np, torch
+"""Offline screen (issue 11, a prototype, not an option): AUC (pumping vs random states) of KDE novelty on the
+standardised latent z', on [z', dz] (dz = z' - z; each coordinate standardised by the training latents) and on dz
+alone; kernel 2x and 8x the median nearest-neighbour distance. Uses analysis.representation's data and agent."""
+
+import json
+import sys
+
+import numpy as np
+import torch
 from omegaconf import OmegaConf
 from analysis import representation as R
 from curiosity.config.build import build
@@ -10,7 +14,8 @@ from curiosity.config.build import build
 def score(cfg, bw, memory, queries, warmup):
     mean, std = memory.mean(0), memory.std(0).clip(min=1e-8)
     mem = torch.as_tensor((memory - mean) / std, dtype=torch.float32)
-    ec = OmegaConf.to_container(cfg.estimator, resolve=True); ec["bandwidth"] = bw
+    ec = OmegaConf.to_container(cfg.estimator, resolve=True)
+    ec["bandwidth"] = bw
     est = build(OmegaConf.create(ec))
     est.fit(mem, mem[: max(2, min(warmup, len(mem)))])
     return est(torch.as_tensor((queries - mean) / std, dtype=torch.float32)).double().numpy()
@@ -21,7 +26,8 @@ def variants(z0, z1):
 
 def main(seed, data_seed, iters, out):
     cfg = R.study_config([f"seed={seed}", "threads=1"])
-    torch.set_num_threads(1); torch.manual_seed(seed)
+    torch.set_num_threads(1)
+    torch.manual_seed(seed)
     data = R.probe_sets(cfg, 600, 300, data_seed)
     agent = R.agent_with_data(cfg, data.train)
     w = int(cfg.budget.warmup_steps)
@@ -42,7 +48,8 @@ def main(seed, data_seed, iters, out):
             for bw in (2.0, 8.0):
                 nov = score(cfg, bw, V["train"][v], np.concatenate([V["random"][v], V["pumping"][v]]), w)
                 row[f"{v}_bw{bw:g}"] = round(R.auc(nov[300:], nov[:300]), 3)
-        res["rows"].append(row); print(row, flush=True)
+        res["rows"].append(row)
+        print(row, flush=True)
     print({k: v for k, v in res.items() if k.startswith("auc")})
     json.dump(res, open(out, "w"), indent=1, default=str)
 
