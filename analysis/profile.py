@@ -27,6 +27,7 @@ PARTS = {"training": "timing/train_ms", "planning": "timing/plan_ms", "memory re
 def _calls(steps: np.ndarray, warmup: int, every: int) -> np.ndarray:
     """Calls per window (previous row's step, step] of an event due at 1-based steps s >= warmup with
     (s - warmup) % every == 0."""
+
     def upto(s: np.ndarray) -> np.ndarray:
         return np.where(s >= warmup, (s - warmup) // every + 1, 0)
 

@@ -46,6 +46,7 @@ def split_code_defaults(
     after a default changed) is not one method. The keys that differ (:func:`analysis.rows.distinguishing_keys` over
     the saved configs, read with the values that reproduce older runs) are appended to ``method``:
     ``ours-… [planner.commit=1]``."""
+
     def usable(f: pd.DataFrame | None) -> bool:
         return f is not None and not f.empty and "run_dir" in f
 

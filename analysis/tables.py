@@ -50,6 +50,7 @@ def per_seed_text(g: pd.DataFrame) -> str:
 
 def _paper(env: str, labels: Sequence[str], numbers: Sequence[dict]) -> dict[str, object]:
     """The published row of ``env`` whose glob matches one of ``labels`` (a row's label and, pooled, its variants')."""
+
     def matches(p: dict) -> bool:
         globs = p["rows"] if isinstance(p["rows"], list) else [p["rows"]]
         return p["env"] == env and any(fnmatch.fnmatchcase(x, g) for x in labels for g in globs)
@@ -110,8 +111,10 @@ def compute_line(runs: pd.DataFrame) -> str:
         return "Compute: no finished run."
     hours = runs.groupby("env", sort=True)["wall_seconds"].agg(["count", "sum"])
     parts = [f"{env} {int(r['count'])} runs, {r['sum'] / 3600:.1f} h" for env, r in hours.iterrows()]
-    return ("Compute (the finished runs' summed `wall_seconds`, one torch thread each, so about CPU-hours; runs that "
-            f"shared the cores count their own, longer, time): {'; '.join(parts)}.")
+    return (
+        "Compute (the finished runs' summed `wall_seconds`, one torch thread each, so about CPU-hours; runs that "
+        f"shared the cores count their own, longer, time): {'; '.join(parts)}."
+    )
 
 
 def code_line(runs: pd.DataFrame) -> str:

@@ -39,11 +39,19 @@ def parse(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--batches", type=int, nargs="+", help="training batch sizes (default 32 64 128; quick: 64)")
     p.add_argument("--memory", type=int, nargs="+", help="memory sizes N (default 1000 10000 100000; quick: 1000)")
     p.add_argument("--repeats", type=int, help="timed calls per median (default 20; quick: 8)")
-    p.add_argument("--reservoir", type=int, default=4096,
-                   help="also measure planning, refresh and log rho error with memory_mode=reservoir of this size at the "
-                        "memory sizes above it (0: skip)")
-    p.add_argument("--reservoir-precision", default="float32", choices=("float64", "float32"),
-                   help="the KDE arithmetic of the reservoir measurement (estimator.precision; the exact rows are float64)")
+    p.add_argument(
+        "--reservoir",
+        type=int,
+        default=4096,
+        help="also measure planning, refresh and log rho error with memory_mode=reservoir of this size at the "
+        "memory sizes above it (0: skip)",
+    )
+    p.add_argument(
+        "--reservoir-precision",
+        default="float32",
+        choices=("float64", "float32"),
+        help="the KDE arithmetic of the reservoir measurement (estimator.precision; the exact rows are float64)",
+    )
     p.add_argument("--baseline-commit", default=BASELINE_COMMIT, help="commit to time the training iteration against")
     p.add_argument("--seeds", type=int, nargs="*", help="seeds of the default agent to run alone (default 100-103)")
     p.add_argument("--seed-dir", help="where the seed runs go (default: a temporary directory); re-running resumes")

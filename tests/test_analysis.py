@@ -94,10 +94,14 @@ def test_steps_table_splits_one_command_run_with_other_code_defaults(sweep: Path
     config.write_text(yaml.safe_dump(cfg))
     res = analysis("steps_table", sweep, "--markdown")
     assert res.returncode == 0, res.stderr
-    assert "-mpc [planner.commit=1] | `python -m runners.train -m planner.horizon=5 planner.temperature=0 seed=0,2` " \
-           "| 2 / 2 (1 more not finished) | 365, 1452 |" in res.stdout
-    assert "-mpc [planner.commit=5] | `python -m runners.train planner.horizon=5 planner.temperature=0 seed=1` " \
-           "| 1 / 1 | 1855 |" in res.stdout
+    assert (
+        "-mpc [planner.commit=1] | `python -m runners.train -m planner.horizon=5 planner.temperature=0 seed=0,2` "
+        "| 2 / 2 (1 more not finished) | 365, 1452 |" in res.stdout
+    )
+    assert (
+        "-mpc [planner.commit=5] | `python -m runners.train planner.horizon=5 planner.temperature=0 seed=1` "
+        "| 1 / 1 | 1855 |" in res.stdout
+    )
 
 
 def test_steps_table_warns_on_stderr_when_a_row_pools_runs_of_other_code_commits(sweep: Path) -> None:

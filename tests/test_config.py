@@ -36,11 +36,15 @@ def test_public_groups_and_options_exist() -> None:
 
 @pytest.mark.parametrize(("group", "option"), group_options())
 def test_every_option_composes_and_validates(group: str, option: str) -> None:
-    extra = {("encoder", "mlp"): ["env.obs=state"], ("env", "chain"): ["encoder=mlp"], ("env", "cartpole"): ["encoder=mlp"],
-             ("intrinsic", "pe"): ["intrinsic.terms.pe.imagined=ensemble", "agent.transition_ensemble=2"],
-             ("intrinsic", "icm"): ["intrinsic.terms.icm.input=latent"],
-             ("intrinsic", "rnd"): ["intrinsic.terms.rnd.input=latent"],
-             ("intrinsic", "re3"): ["intrinsic.terms.re3.input=latent"]}.get((group, option), [])  # the planner imagines
+    extra = {
+        ("encoder", "mlp"): ["env.obs=state"],
+        ("env", "chain"): ["encoder=mlp"],
+        ("env", "cartpole"): ["encoder=mlp"],
+        ("intrinsic", "pe"): ["intrinsic.terms.pe.imagined=ensemble", "agent.transition_ensemble=2"],
+        ("intrinsic", "icm"): ["intrinsic.terms.icm.input=latent"],
+        ("intrinsic", "rnd"): ["intrinsic.terms.rnd.input=latent"],
+        ("intrinsic", "re3"): ["intrinsic.terms.re3.input=latent"],
+    }.get((group, option), [])  # the planner imagines
     cfg = compose_cfg([f"{group}={option}", *extra])
     resolved = OmegaConf.to_container(cfg, resolve=True)
     assert isinstance(resolved, dict)

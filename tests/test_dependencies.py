@@ -15,8 +15,13 @@ from tests.conftest import REPO
 tomllib = pytest.importorskip("tomllib")  # Python >= 3.11
 
 LOCAL = {"curiosity", "runners", "analysis", "tests"}
-DISTRIBUTION = {"yaml": "pyyaml", "cv2": "opencv-python-headless", "hydra": "hydra-core", "sklearn": "scikit-learn",
-                "PIL": "pillow"}
+DISTRIBUTION = {
+    "yaml": "pyyaml",
+    "cv2": "opencv-python-headless",
+    "hydra": "hydra-core",
+    "sklearn": "scikit-learn",
+    "PIL": "pillow",
+}
 
 
 def _name(requirement: str) -> str:

@@ -12,8 +12,13 @@ from curiosity.envs import make_env
 from curiosity.runtime.device import resolve_device, to_device
 from tests.conftest import compose_cfg
 
-SMALL = ["env.renderer=fast", "budget=smoke", "budget.warmup_steps=8", "agent.batch_size=4",
-         "intrinsic.terms.novelty.refresh_every=4"]
+SMALL = [
+    "env.renderer=fast",
+    "budget=smoke",
+    "budget.warmup_steps=8",
+    "agent.batch_size=4",
+    "intrinsic.terms.novelty.refresh_every=4",
+]
 
 
 @pytest.mark.parametrize("overrides", [["planner.horizon=2", "agent.probe_every=3"], ["+experiment=paper_code"],

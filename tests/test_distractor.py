@@ -131,10 +131,14 @@ def test_behaviour_counts_tv_presses() -> None:
 @pytest.mark.parametrize(
     ("overrides", "message"),
     [
-        (["env.distractor=noisy_tv", "env.obs=state", "encoder=mlp"],
-         "env.distractor=noisy_tv: the noisy TV is a patch of the frame"),
-        (["env.distractor=noisy_tv", "env.tv.size=8", "env.tv.col=30"],
-         "env.tv.size=8, env.tv.row=0, env.tv.col=30: the patch must lie inside"),
+        (
+            ["env.distractor=noisy_tv", "env.obs=state", "encoder=mlp"],
+            "env.distractor=noisy_tv: the noisy TV is a patch of the frame",
+        ),
+        (
+            ["env.distractor=noisy_tv", "env.tv.size=8", "env.tv.col=30"],
+            "env.tv.size=8, env.tv.row=0, env.tv.col=30: the patch must lie inside",
+        ),
         (["env.distractor=noisy_tv", "env.tv.size=0"], "env.tv.size=0"),
     ],
 )

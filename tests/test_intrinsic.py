@@ -25,8 +25,11 @@ STATE = ["env.obs=state", "encoder=mlp", "budget=smoke", "budget.warmup_steps=12
 WITH_NOVELTY = ("hybrid", "novelty")  # options with a latent novelty term (its memory refreshes every 5 steps here)
 # (option, extra overrides, agent): every option in both agents, where the agent has the parts it needs
 OBS_OR_LATENT = ("icm", "rnd", "re3")  # read frames by default; on latents they also score imagined steps
-CASES = [(name, ["intrinsic.terms.pe.imagined=ensemble", "agent.transition_ensemble=2"] if name == "pe" else [], "paper")
-         for name in REGISTERED if name not in OBS_OR_LATENT]
+CASES = [
+    (name, ["intrinsic.terms.pe.imagined=ensemble", "agent.transition_ensemble=2"] if name == "pe" else [], "paper")
+    for name in REGISTERED
+    if name not in OBS_OR_LATENT
+]
 CASES += [(name, [f"intrinsic.terms.{name}.input=latent"], "paper") for name in OBS_OR_LATENT]
 CASES += [(name, [], "q") for name in REGISTERED if name not in ("hybrid", "pe")]  # the Q agent has no world model
 CASES += [(name, [f"intrinsic.terms.{name}.input=latent"], "q") for name in OBS_OR_LATENT]

@@ -83,8 +83,7 @@ OTHER = {
     "estimator.k=64 (the first memory)": Case(("estimator=knn", "estimator.k=64"), "estimator.k"),
     "budget.warmup_steps=1 (< n_step)": Case(("budget.warmup_steps=1",), "budget.warmup_steps"),
     "budget.max_steps=64 (= warm-up)": Case(("budget.max_steps=64",), "budget.max_steps"),
-    "encoder.random_dim=4 (= internal_dim)": Case(("encoder=conv_with_random", "encoder.random_dim=4"),
-                                                  "encoder.random_dim"),
+    "encoder.random_dim=4 (= internal_dim)": Case(("encoder=conv_with_random", "encoder.random_dim=4"), "encoder.random_dim"),
     "nsrs preset": Case(("baseline=nsrs", "planner.horizon=0"), "planner.horizon=0"),
     # keys and values the schema does not have
     "+foo=1": Case(("+foo=1",), "foo"),

@@ -17,15 +17,27 @@ from tests.conftest import CONF, run_cli
 
 # preset -> (results directory, env, the values each swept key takes, seeds)
 PRESETS = {
-    "table1": ("results/table1", "acrobot",
-               {"+experiment": ["ours", "paper_text", "paper_code", "nsrs", "icm", "rnd", "random", "oracle"]}, 10),
-    "table2": ("results/table2", "mountaincar",
-               {"+experiment": ["ours", "paper_text_renyi", "paper_text_renyi_mi", "nsrs", "icm", "rnd", "random"]}, 10),
+    "table1": (
+        "results/table1",
+        "acrobot",
+        {"+experiment": ["ours", "paper_text", "paper_code", "nsrs", "icm", "rnd", "random", "oracle"]},
+        10,
+    ),
+    "table2": (
+        "results/table2",
+        "mountaincar",
+        {"+experiment": ["ours", "paper_text_renyi", "paper_text_renyi_mi", "nsrs", "icm", "rnd", "random"]},
+        10,
+    ),
     "fig6": ("results/fig6", "acrobot", {"entropy": ["gaussian_potential", "renyi", "renyi_mi", "none"]}, 6),
     "fig7": ("results/fig7", "acrobot", {"estimator": ["kde", "knn"]}, 6),
     "hybrid": ("results/hybrid", "acrobot", {"+experiment": ["ours_density", "ours_hybrid", "ours_pe"]}, 6),
-    "noisy_tv": ("results/noisy_tv", "acrobot", {"+experiment": ["icm", "rnd", "ours_pe", "ours_density", "ours_hybrid"],
-                                                "env.distractor": ["none", "noisy_tv"]}, 8),
+    "noisy_tv": (
+        "results/noisy_tv",
+        "acrobot",
+        {"+experiment": ["icm", "rnd", "ours_pe", "ours_density", "ours_hybrid"], "env.distractor": ["none", "noisy_tv"]},
+        8,
+    ),
 }
 
 

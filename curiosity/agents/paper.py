@@ -71,7 +71,8 @@ def build_world_model(cfg: DictConfig) -> WorldModel:
                                  hidden=b.hidden) if b.coef > 0 else None  # fmt: skip
     if own.transition_ensemble > 1:
         transition: torch.nn.Module = TransitionEnsemble(
-            d, n_actions, size=own.transition_ensemble, hidden=own.transition_hidden, dropout=own.transition_dropout)
+            d, n_actions, size=own.transition_ensemble, hidden=own.transition_hidden, dropout=own.transition_dropout
+        )
     else:
         transition = ResidualTransition(d, n_actions, hidden=own.transition_hidden, dropout=own.transition_dropout)
     return WorldModel(build(cfg.encoder), transition, n_actions, reward, backward)
@@ -180,9 +181,17 @@ class PaperAgent(Agent):
         if self.oracle:
             assert self.simulator is not None, "attach_env() was not called"
             rollout = SimulatorRollout(self.simulator, self._root(obs), z0, self.model.encode)
-        return self.planner.plan(PlanRequest(
-            z0, self.model.next, self.intrinsic.imagined_terms, reward_fn=self._reward_fn(),
-            q_fn=self.q.values if self.q is not None else None, generator=self.generator, rollout=rollout))
+        return self.planner.plan(
+            PlanRequest(
+                z0,
+                self.model.next,
+                self.intrinsic.imagined_terms,
+                reward_fn=self._reward_fn(),
+                q_fn=self.q.values if self.q is not None else None,
+                generator=self.generator,
+                rollout=rollout,
+            )
+        )
 
     def _score_noise(self, z0: torch.Tensor, obs: np.ndarray) -> dict[str, float]:
         """Two fresh evaluations of the (stochastic) scores of every candidate: their noise and whether the best first

@@ -19,8 +19,15 @@ from curiosity.types import SegmentBatch
 
 Regulariser = Callable[[Tensor, Tensor, Tensor], tuple[Tensor, dict[str, float]]]
 
-LOSS_KEYS = ("losses/transition", "losses/entropy", "losses/reward", "losses/backward", "losses/total", "info/gram_offdiag",
-             "info/latent_logdet")
+LOSS_KEYS = (
+    "losses/transition",
+    "losses/entropy",
+    "losses/reward",
+    "losses/backward",
+    "losses/total",
+    "info/gram_offdiag",
+    "info/latent_logdet",
+)
 
 
 def check_finite(term: str, value: Tensor) -> None:

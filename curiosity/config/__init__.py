@@ -6,7 +6,14 @@ from curiosity.config.schema import register_schemas
 from curiosity.config.validate import ConfigError, sampled_candidates, validate
 
 __all__ = [
-    "ConfigError", "build", "choice", "register_resolvers", "register_schemas", "sampled_candidates", "setup", "validate",
+    "ConfigError",
+    "build",
+    "choice",
+    "register_resolvers",
+    "register_schemas",
+    "sampled_candidates",
+    "setup",
+    "validate",
 ]
 
 

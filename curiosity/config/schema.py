@@ -440,6 +440,7 @@ class Config:
     method_label: str = "${baseline.label}"
     agent: AgentKeysConfig = field(default_factory=AgentKeysConfig)
 
+
 _GROUP_SCHEMAS: dict[str, dict[str, type]] = {
     "env": {"env": EnvConfig},
     "encoder": {"conv": ConvEncoderConfig, "conv_with_random": ConvWithRandomConfig, "mlp": MLPEncoderConfig},

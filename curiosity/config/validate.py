@@ -140,9 +140,7 @@ def _cross_field_errors(cfg: DictConfig) -> list[str]:
         errors.append(f"budget.warmup_steps={cfg.budget.warmup_steps}: must be >= agent.n_step={cfg.agent.n_step} "
                       "(segments to sample)")  # fmt: skip
     if cfg.budget.max_steps <= cfg.budget.warmup_steps:
-        errors.append(
-            f"budget.max_steps={cfg.budget.max_steps}: must be > budget.warmup_steps={cfg.budget.warmup_steps}"
-        )
+        errors.append(f"budget.max_steps={cfg.budget.max_steps}: must be > budget.warmup_steps={cfg.budget.warmup_steps}")
     return errors
 
 

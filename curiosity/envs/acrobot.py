@@ -37,7 +37,6 @@ def energy(state: np.ndarray) -> np.ndarray:
     return kinetic + potential
 
 
-
 class AcrobotAdapter(EnvAdapter):
     """Acrobot-v1: termination is the goal; physical state (θ1, θ2, θ̇1, θ̇2)."""
 

@@ -13,8 +13,10 @@ import time
 from pathlib import Path
 
 ENV = {**os.environ, "OMP_NUM_THREADS": "1", "SDL_VIDEODRIVER": "dummy"}
-LOOP = ("import torch,time; torch.set_num_threads(1); a=torch.randn(256,256); t=time.perf_counter()\n"
-        "for _ in range(4000): a=torch.tanh(a@a*0.01)\nprint(time.perf_counter()-t)")
+LOOP = (
+    "import torch,time; torch.set_num_threads(1); a=torch.randn(256,256); t=time.perf_counter()\n"
+    "for _ in range(4000): a=torch.tanh(a@a*0.01)\nprint(time.perf_counter()-t)"
+)
 
 
 def run(cmds: list[list[str]]) -> list[tuple[float, str]]:
@@ -29,8 +31,16 @@ def run(cmds: list[list[str]]) -> list[tuple[float, str]]:
 
 
 def smoke(seed: int, root: Path) -> list[str]:
-    return [sys.executable, "-m", "runners.train", f"seed={seed}", "budget=smoke", "progress=false", "threads=1",
-            f"hydra.run.dir={root}/seed_{seed}"]
+    return [
+        sys.executable,
+        "-m",
+        "runners.train",
+        f"seed={seed}",
+        "budget=smoke",
+        "progress=false",
+        "threads=1",
+        f"hydra.run.dir={root}/seed_{seed}",
+    ]
 
 
 def main(path: str) -> None:
@@ -43,9 +53,19 @@ def main(path: str) -> None:
             walls = [w for w, _ in run([smoke(s, root) for s in seeds])]
             inner = [json.loads((root / f"seed_{s}" / "summary.json").read_text())["wall_seconds"] for s in seeds]
             res[name] = {"process_wall_s": walls, "run_wall_s": inner}
-    res["import_s"] = float(subprocess.run([sys.executable, "-c", "import time; t=time.perf_counter(); import torch, "
-                                            "gymnasium, runners.train, curiosity.agents.paper; print(time.perf_counter()-t)"],
-                                           env=ENV, capture_output=True, text=True).stdout)
+    res["import_s"] = float(
+        subprocess.run(
+            [
+                sys.executable,
+                "-c",
+                "import time; t=time.perf_counter(); import torch, "
+                "gymnasium, runners.train, curiosity.agents.paper; print(time.perf_counter()-t)",
+            ],
+            env=ENV,
+            capture_output=True,
+            text=True,
+        ).stdout
+    )
     print(json.dumps(res, indent=1))
     Path(path).write_text(json.dumps(res, indent=1))
 

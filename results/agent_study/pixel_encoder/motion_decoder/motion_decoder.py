@@ -10,6 +10,7 @@ where and how fast the links move has to carry the velocity.
 
 (the arguments after COEF are analysis.encoder_geometry's). COEF 0: the check unchanged.
 """
+
 import sys
 
 import torch

@@ -11,6 +11,7 @@ from omegaconf import OmegaConf
 from analysis import representation as R
 from curiosity.config.build import build
 
+
 def score(cfg, bw, memory, queries, warmup):
     mean, std = memory.mean(0), memory.std(0).clip(min=1e-8)
     mem = torch.as_tensor((memory - mean) / std, dtype=torch.float32)
@@ -20,9 +21,11 @@ def score(cfg, bw, memory, queries, warmup):
     est.fit(mem, mem[: max(2, min(warmup, len(mem)))])
     return est(torch.as_tensor((queries - mean) / std, dtype=torch.float32)).double().numpy()
 
+
 def variants(z0, z1):
     dz = z1 - z0
     return {"z": z1, "z+dz": np.concatenate([z1, dz], 1), "dz": dz}
+
 
 def main(seed, data_seed, iters, out):
     cfg = R.study_config([f"seed={seed}", "threads=1"])
@@ -52,6 +55,7 @@ def main(seed, data_seed, iters, out):
         print(row, flush=True)
     print({k: v for k, v in res.items() if k.startswith("auc")})
     json.dump(res, open(out, "w"), indent=1, default=str)
+
 
 if __name__ == "__main__":  # usage: screen.py MODEL_SEED DATA_SEED OUT.json
     main(int(sys.argv[1]), int(sys.argv[2]), [0, 1000, 2000], sys.argv[3])

@@ -4,6 +4,7 @@ added (a head Linear(2d, 64) -> ReLU -> Linear(64, A) on [z_t, z_{t+1}], cross-e
 
 From the repository root: ``PYTHONPATH=. python results/agent_study/pixel_encoder/predictability/inverse_predict.py
 COEF MODE OUT.json [OVERRIDES...]``."""
+
 import runpy
 import sys
 from pathlib import Path
@@ -45,4 +46,5 @@ if mode == "predict":
     runpy.run_path(str(Path(__file__).with_name("predict_screen.py")), run_name="__main__")
 else:
     import analysis.encoder_geometry as geo
+
     sys.exit(geo.main([*overrides, "--seeds", "0,1", "--train-iters", "1000", "--json", out]))

@@ -9,6 +9,7 @@ R2_disp = 1 - MSE_model / MSE_persist (the share of the latent's motion the mode
 by the held-out set's per-dimension std; and the share of variance of z along which the action matters:
 action_gap = RMS over states of (model's 3-step endpoint spread across the 27 sequences) / persistence RMSE(3).
 """
+
 import itertools
 import json
 import sys
@@ -39,7 +40,7 @@ for seed in (0, 1):
     secs = time.time() - t0
     with agent.model.evaluating():
         obs = torch.as_tensor(np.concatenate([held.obs[:1], held.next_obs]), dtype=torch.float32)
-        z = torch.cat([agent.model.encode(obs[i:i + 256]) for i in range(0, len(obs), 256)])
+        z = torch.cat([agent.model.encode(obs[i : i + 256]) for i in range(0, len(obs), 256)])
         sd = z.std(0).clamp_min(1e-8)
         acts = torch.as_tensor(held.actions, dtype=torch.long)
         row = {"seed": seed, "train_seconds": secs}
@@ -52,8 +53,8 @@ for seed in (0, 1):
             true = z[idx + k]
             mse_m = (((zh - true) / sd) ** 2).sum(1).mean().item()
             mse_p = (((z[idx] - true) / sd) ** 2).sum(1).mean().item()
-            row[f"rmse_model_{k}"] = mse_m ** 0.5
-            row[f"rmse_persist_{k}"] = mse_p ** 0.5
+            row[f"rmse_model_{k}"] = mse_m**0.5
+            row[f"rmse_persist_{k}"] = mse_p**0.5
             row[f"r2_disp_{k}"] = 1 - mse_m / mse_p
         seqs = torch.as_tensor(list(itertools.product(range(n_act), repeat=3)), dtype=torch.long)
         starts = z[torch.arange(0, T - 3, 8)]
