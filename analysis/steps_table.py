@@ -18,7 +18,7 @@ from pathlib import Path
 import pandas as pd
 
 from analysis.collect import existing_roots, load_incomplete, load_summaries
-from analysis.rows import distinguishing_keys, flat_config
+from analysis.rows import code_commit, distinguishing_keys, flat_config
 
 BY = ("env", "method", "variant")
 
@@ -113,7 +113,7 @@ def pooled_commits(summaries: pd.DataFrame, by: tuple[str, ...] = BY) -> list[st
         summaries, _ = split_code_defaults(summaries)
     f = summaries[summaries["git_commit"].notna()].copy()
     dirty = f["git_dirty"].fillna(False).astype(bool) if "git_dirty" in f else pd.Series(False, index=f.index)
-    f["code"] = f["git_commit"].astype(str).str[:7] + dirty.map({True: "+dirty", False: ""})
+    f["code"] = [code_commit({"git_commit": c, "git_dirty": d}) for c, d in zip(f["git_commit"], dirty, strict=True)]
     lines = []
     for key, g in f.groupby(list(by), sort=True):
         counts = g["code"].value_counts(sort=False).sort_index()

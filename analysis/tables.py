@@ -6,8 +6,9 @@ method as its config defines it (``analysis.rows``): seeds, successes, every see
 mean ± SE with censored runs at their last step (the paper's Table 2 rule) and over successes only, median, IQM with
 a stratified-bootstrap 95 % CI, Welch's t-test p against the reference row, and the published number beside ours
 (``analysis/paper_numbers.yaml``); below it the compute the runs took and the code commits that made them, naming
-every row that pools runs of more than one. Runs without ``summary.json`` are listed apart, never dropped silently. Where runs
-have a noisy TV, ``distractor.{md,csv}`` set each method with the TV beside itself without (``analysis.distractor``).
+every row that pools runs of more than one. Runs without ``summary.json`` are listed apart, never dropped silently.
+Where runs have a noisy TV, ``distractor.{md,csv}`` set each method with the TV beside itself without
+(``analysis.distractor``).
 """
 
 from __future__ import annotations
