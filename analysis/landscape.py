@@ -30,7 +30,7 @@ from curiosity.envs import adapter_of
 from curiosity.envs.simulator import Simulator
 from curiosity.novelty.estimators import KDENovelty, KNNNovelty
 from curiosity.planning.probe import tree_latents
-from curiosity.planning.rollout import ReplayRollout, SimulatorRollout
+from curiosity.planning.rollout import ReplayRollout, SimulatorRollout, held
 from curiosity.runtime.restore import RestoreError, restore_run
 
 
@@ -88,12 +88,12 @@ def landscape(run_dir: str | Path, states: int = 20, bandwidths: tuple[float, ..
         with model.evaluating():
             z0 = model.encode(torch.as_tensor(obs).unsqueeze(0))[0]
             true = SimulatorRollout(agent.simulator, agent.simulator.root(env, obs), z0, model.encode)
-            levels = tree_latents(true, planner.n_actions, planner.horizon)
+            levels = tree_latents(held(true, planner.hold), planner.n_actions, planner.horizon)
             e = energy(true.states.physical)
             best_first = int(np.argmax([e[first == a].max() for a in range(planner.n_actions)]))
             for name, novelty in variants.items():
                 g = planner.scores(z0, seqs, model.next, None, lambda z, a, zn, f=novelty: f(zn),
-                                   rollout=ReplayRollout(z0, levels)).numpy()  # fmt: skip
+                                   rollout=ReplayRollout(z0, levels, planner.hold)).numpy()  # fmt: skip
                 if np.ptp(g) > 0:
                     rho[name].append(float(spearmanr(g, e).statistic))
                 hit[name].append(float(first[int(np.argmax(g))] == best_first))

@@ -250,6 +250,21 @@ def test_each_observation_is_encoded_once_per_encoder_state() -> None:
         assert torch.equal(agent.encode_obs(obs), fresh)
 
 
+def _drive(agent, env, obs, steps: int, executed: list[int], after_step=None, warmup: int = 4):
+    """``warmup`` fixed actions (step % 3), then ``steps`` of the agent's, appended to ``executed``; every transition
+    observed; ``after_step(step)`` after each. Returns the last observation."""
+    for step in range(warmup + steps):
+        action = agent.act(obs, step) if step >= warmup else step % 3
+        if step >= warmup:
+            executed.append(action)
+        nxt, r, term, _, _ = env.step(action)
+        agent.observe(obs, action, float(r), nxt, bool(term), step)
+        obs = nxt
+        if after_step is not None:
+            after_step(step)
+    return obs
+
+
 def test_planner_commit_executes_the_chosen_sequence_before_planning_again() -> None:
     from curiosity.envs import make_env
 
@@ -269,24 +284,45 @@ def test_planner_commit_executes_the_chosen_sequence_before_planning_again() -> 
         return out
 
     agent.planner.plan = counting_plan
-    for step in range(4 + 12):
-        action = agent.act(obs, step) if step >= 4 else step % 3
-        if step >= 4:
-            executed.append(action)
-        nxt, r, term, _, _ = env.step(action)
-        agent.observe(obs, action, float(r), nxt, bool(term), step)
-        obs = nxt
+
+    def round_trip(step: int) -> None:
         if step == 8:  # mid-sequence: the queue survives a checkpoint round trip
             state = agent.state_dict()
             assert state["queue"] == agent.queue and len(agent.queue) == 1
             agent.queue = []
             agent.load_state_dict(state)
             assert agent.queue == state["queue"]
+
+    obs = _drive(agent, env, obs, 12, executed, round_trip)
     assert plans == 4 and executed == chosen  # 12 agent steps, 3 actions per plan, every planned action executed
     agent.act(obs, 16)
     assert len(agent.queue) == 2
     agent.observe(obs, 0, -1.0, obs, True, 16)  # a termination that is not the goal: the loop resets the env
     assert agent.queue == []  # the rest of the sequence was planned for the episode that ended
+
+
+def test_planner_hold_executes_each_planned_action_hold_times() -> None:
+    from curiosity.envs import make_env
+
+    cfg = compose_cfg(["env.renderer=fast", "budget=smoke", "budget.warmup_steps=4", "agent.batch_size=4", "planner.horizon=3",
+                       "planner.commit=2", "planner.hold=3", "agent.probe_every=0"])  # fmt: skip
+    agent = PaperAgent(cfg)
+    env = make_env(cfg.env, 100)
+    obs, _ = env.reset(seed=0)
+    plans: list[list[int]] = []
+    plan = agent.planner.plan
+
+    def recording_plan(*args, **kwargs):
+        out = plan(*args, **kwargs)
+        plans.append(out.sequence)
+        return out
+
+    agent.planner.plan = recording_plan
+    executed: list[int] = []
+    _drive(agent, env, obs, 12, executed)
+    assert len(plans) == 2 and all(len(p) == 9 for p in plans)  # 3 planned actions x 3 steps each
+    assert executed == plans[0][:6] + plans[1][:6]  # commit 2 held actions: 6 env steps per plan
+    assert all(p[0] == p[1] == p[2] and p[3] == p[4] == p[5] for p in plans)
 
 
 def test_planner_commit_beyond_the_horizon_is_refused() -> None:

@@ -121,6 +121,17 @@ def test_probe_gives_the_known_answers_for_an_exact_and_a_blind_model() -> None:
     assert "probe/spearman" not in blind  # constant model scores: no rank correlation
 
 
+def test_probe_with_held_actions_compares_held_futures() -> None:
+    sim, root, z0 = chain_root(30)
+    planner = MPCPlanner(horizon=3, gamma=0.9, temperature=0.0, hold=2)
+    exact = probe_model(planner, z0, exact_step, None, rightward, sim, root, Identity1D())
+    for k in range(1, 4):
+        assert exact[f"probe/effect_ratio/{k}"] == pytest.approx(1.0, abs=1e-5)
+        assert exact[f"probe/error/{k}"] == pytest.approx(0.0, abs=1e-6)
+    assert exact["probe/effect_true/1"] == pytest.approx(2 * STEP * np.sqrt(2 / 3), rel=1e-5)  # a depth is 2 steps
+    assert exact["probe/spearman"] == pytest.approx(1.0, abs=1e-9) and exact["probe/agree"] == 1.0
+
+
 def test_probe_sees_the_wall_that_a_wall_free_model_misses() -> None:
     sim, root, z0 = chain_root(CHAIN - 2)  # one cell from the right wall
     planner = MPCPlanner(horizon=3, gamma=0.9, temperature=0.0)

@@ -92,6 +92,49 @@ def test_mpc_scores_match_brute_force_on_random_nets(horizon, max_candidates):
         torch.testing.assert_close(planner.scores(z0, seqs, step, reward, intrinsic), expected)
 
 
+def held_brute_force_returns(z0, seqs, step, reward, intrinsic, gamma, eta, hold):
+    """Each action held ``hold`` steps; reward on the state before the held action, intrinsic on its whole edge."""
+    out = []
+    for seq in seqs.tolist():
+        z, total = z0.unsqueeze(0), 0.0
+        for i, a in enumerate(seq):
+            act = torch.tensor([a])
+            z_next = z
+            for _ in range(hold):
+                z_next = step(z_next, act)
+            total += gamma**i * float(reward(z, act) + eta * intrinsic(z, act, z_next))
+            z = z_next
+        out.append(total)
+    return torch.tensor(out, dtype=torch.float64)
+
+
+def test_mpc_held_actions_match_brute_force_and_expand_the_plan():
+    torch.manual_seed(0)
+    model = ResidualTransition(2, 3, dropout=0.0).double().eval()
+
+    def step(z, a):
+        return model(z, one_hot(a, 3).double())
+
+    def intrinsic(z, a, z_next):
+        return torch.cos(z_next).sum(1) - 0.3 * (z_next - z).square().sum(1)
+
+    planner = MPCPlanner(horizon=3, gamma=0.8, eta=0.7, temperature=0.0, hold=3, commit=2)
+    z0 = torch.randn(2, dtype=torch.float64)
+    seqs = planner.candidates()
+    assert seqs.shape == (27, 3)  # A^H candidates whatever the hold
+    with torch.no_grad():
+        expected = held_brute_force_returns(z0, seqs, step, toy_reward, intrinsic, 0.8, 0.7, 3)
+        torch.testing.assert_close(planner.scores(z0, seqs, step, toy_reward, intrinsic), expected)
+        one_step = held_brute_force_returns(z0, seqs, step, toy_reward, intrinsic, 0.8, 0.7, 1)
+    assert not torch.allclose(expected, one_step)  # holding changes what is scored
+    plan = planner.plan(PlanRequest(z0, step, intrinsic, toy_reward))
+    best = seqs[int(expected.argmax())].tolist()
+    assert plan.sequence == [a for a in best for _ in range(3)]  # 9 env actions, each planned action held 3 steps
+    assert planner.commit == 6  # commit counts held actions: 2 of them, 6 env actions
+    with pytest.raises(ValueError, match=r"planner\.hold"):
+        MPCPlanner(horizon=3, hold=0)
+
+
 def test_mpc_scores_rewards_before_stepping():
     def poisoned_step(z, a):
         return torch.full_like(z, float("nan"))

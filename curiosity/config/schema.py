@@ -257,6 +257,7 @@ class MPCConfig:
     temperature_scale: TemperatureScale = TemperatureScale.absolute
     model: PlannerModel = PlannerModel.learned
     commit: int = 1  # actions of the chosen sequence executed before planning again (1: receding horizon)
+    hold: int = 1  # env steps each planned action is held for (the tree looks horizon x hold steps ahead)
 
 
 @dataclass

@@ -77,6 +77,7 @@ RULES: list[Rule] = [
     ("planner.eta", lambda v: v >= 0, "a number >= 0"),
     ("planner.max_candidates", lambda v: v >= 1, "an integer >= 1"),
     ("planner.commit", lambda v: v >= 1, "an integer >= 1 (1: plan at every step)"),
+    ("planner.hold", lambda v: v >= 1, "an integer >= 1 (1: every env step its own action)"),
     ("agent.transition_ensemble", lambda v: v >= 1, "an integer >= 1 (1: one transition model)"),
     ("intrinsic.terms.novelty.refresh_drift", lambda v: v >= 0, "a number >= 0 (0: refresh on the schedule only)"),
     ("agent.probe_every", lambda v: v >= 0, "an integer >= 0 (0: no model probe)"),

@@ -8,7 +8,7 @@ import torch
 from torch import Tensor
 
 from curiosity.planning.protocols import IntrinsicFn, Plan, PlanRequest, ScoreFn
-from curiosity.planning.rollout import LatentRollout, Rollout, StepFn
+from curiosity.planning.rollout import LatentRollout, Rollout, StepFn, held
 
 TEMPERATURE_SCALES = ("absolute", "spread")
 PLANNER_MODELS = ("learned", "oracle")
@@ -39,7 +39,11 @@ class MPCPlanner:
         model: where imagined futures come from: ``learned`` (the world model) or ``oracle`` (the real simulator,
             rendered and encoded: the upper bound a learned model is measured against). The agent builds the rollout.
         commit: how many actions of the chosen sequence the agent executes before it plans again (1: replan at every
-            step, receding horizon); the agent executes that many actions of :attr:`Plan.sequence`.
+            step, receding horizon); the agent executes that many actions of :attr:`Plan.sequence` (× ``hold``).
+        hold: env steps each action of a candidate is held for (1: every step its own action). A candidate is still
+            H actions (A^H candidates), but it looks H × hold steps ahead; each depth's terms are scored once, on
+            the edge from the latent before the held action to the latent after it. :attr:`Plan.sequence` holds the
+            H × hold env actions, and :attr:`commit` counts env actions (``commit × hold``).
     """
 
     needs_q: ClassVar[bool] = False
@@ -56,10 +60,14 @@ class MPCPlanner:
         temperature_scale: str = "absolute",
         model: str = "learned",
         commit: int = 1,
+        hold: int = 1,
     ) -> None:
         if not 1 <= commit <= horizon:
             raise ValueError(f"planner.commit must be in [1, planner.horizon={horizon}], got {commit}")
-        self.commit = int(commit)
+        if hold < 1:
+            raise ValueError(f"planner.hold must be >= 1, got {hold}")
+        self.hold = int(hold)
+        self.commit = int(commit) * self.hold  # env actions executed per plan
         if horizon < 1 or n_actions < 1 or max_candidates < 1:
             raise ValueError("horizon, n_actions and max_candidates must be >= 1")
         if n_actions**horizon > max_candidates and not sample_candidates:
@@ -110,14 +118,16 @@ class MPCPlanner:
             reward_fn: R(z (M, d), a (M,) long) -> (M,), or None for zero extrinsic reward.
             intrinsic_fn: r_int(z (M, d), a (M,) long, z_next (M, d)) -> (M,), or a mapping of named terms (M,) each
                 whose sum is r_int (e.g. ``novelty`` and ``pe``).
-            rollout: where the futures come from (:mod:`curiosity.planning.rollout`); default the learned model.
+            rollout: where the futures come from (:mod:`curiosity.planning.rollout`); default the learned model. Each
+                expand covers ``hold`` env steps (a one-step rollout is wrapped in a
+                :class:`~curiosity.planning.rollout.HeldRollout`).
 
         Returns:
             term name -> (N,) Σ_i γ^i term_i: ``reward`` (R), and η × each intrinsic term (``intrinsic`` when
             ``intrinsic_fn`` returns one tensor).
         """
         seqs = seqs.to(z0.device)
-        rollout = LatentRollout(z0, step_fn) if rollout is None else rollout
+        rollout = held(LatentRollout(z0, step_fn) if rollout is None else rollout, self.hold)
         node = torch.zeros(seqs.shape[0], dtype=torch.long, device=z0.device)
         terms: dict[str, Tensor] = {}
         for i in range(seqs.shape[1]):
@@ -171,9 +181,10 @@ class MPCPlanner:
         ``generator`` (candidate sampling and the softmax draw; CPU) and ``rollout``.
 
         Returns:
-            the chosen sequence, its Ĝ, and info keys ``best_score``, ``entropy`` (nats, of the choice over candidates;
-            0 for argmax), ``first_action_entropy`` (nats, of the first action's marginal), ``p_first/<a>``,
-            ``n_candidates``, ``spread/<term>`` (std across candidates of each term's return) and ``spread/score``.
+            the chosen sequence (each action repeated ``hold`` times), its Ĝ, and info keys ``best_score``,
+            ``entropy`` (nats, of the choice over candidates; 0 for argmax), ``first_action_entropy`` (nats, of the
+            first action's marginal), ``p_first/<a>``, ``n_candidates``, ``spread/<term>`` (std across candidates of
+            each term's return) and ``spread/score``.
         """
         with torch.no_grad():
             seqs = self.candidates(request.generator)
@@ -191,7 +202,7 @@ class MPCPlanner:
             **{f"spread/{k}": float(v.std(correction=0)) for k, v in terms.items()},
             **{f"p_first/{a}": float(p) for a, p in enumerate(first)},
         }
-        return Plan([int(a) for a in seqs[index]], float(returns[index]), info)
+        return Plan([int(a) for a in seqs[index] for _ in range(self.hold)], float(returns[index]), info)
 
 
 def _total(terms: dict[str, Tensor]) -> Tensor:

@@ -4,6 +4,8 @@ From one state of a run, the probe expands the full tree of action sequences of 
 with the learned transition and once with the real simulator (each true future rendered and encoded with the run's
 encoder), and reports:
 
+With ``planner.hold`` > 1 a depth is that many env steps (each action held), as the planner sees it.
+
 (a) the action effect at depth k = 1..H: the RMS spread of the depth-k latents across all A^k action prefixes,
     predicted (``effect_pred/k``) and true (``effect_true/k``), their ratio (``effect_ratio/k``; 1 is right, 0 is a
     model that ignores the action), and the RMS error of the predicted latents (``error/k``);
@@ -23,7 +25,7 @@ from torch import Tensor
 from curiosity.envs.simulator import Simulator, SimStates
 from curiosity.planning.mpc import MPCPlanner
 from curiosity.planning.protocols import IntrinsicFn, ScoreFn
-from curiosity.planning.rollout import LatentRollout, ReplayRollout, Rollout, SimulatorRollout, StepFn
+from curiosity.planning.rollout import LatentRollout, ReplayRollout, Rollout, SimulatorRollout, StepFn, held
 
 
 def tree_latents(rollout: Rollout, n_actions: int, horizon: int) -> list[Tensor]:
@@ -70,8 +72,8 @@ def probe_model(planner: MPCPlanner, z0: Tensor, step_fn: StepFn, reward_fn: Sco
         constant scores) is left out.
     """
     h, a = planner.horizon, planner.n_actions
-    predicted = tree_latents(LatentRollout(z0, step_fn), a, h)
-    true = tree_latents(SimulatorRollout(simulator, root, z0, encode), a, h)
+    predicted = tree_latents(held(LatentRollout(z0, step_fn), planner.hold), a, h)
+    true = tree_latents(held(SimulatorRollout(simulator, root, z0, encode), planner.hold), a, h)
     out: dict[str, float] = {}
     for k, (zp, zt) in enumerate(zip(predicted, true, strict=True), start=1):
         effect_true, effect_pred = _rms(zt - zt.mean(0)), _rms(zp - zp.mean(0))
@@ -82,7 +84,7 @@ def probe_model(planner: MPCPlanner, z0: Tensor, step_fn: StepFn, reward_fn: Sco
     seqs = planner.candidates(torch.Generator(device="cpu").manual_seed(0))
     g_model = planner.scores(z0, seqs, step_fn, reward_fn, intrinsic_fn).cpu().numpy()
     full = len(seqs) == a**h  # all sequences: score the true tree above again instead of simulating it twice
-    replay = ReplayRollout(z0, true) if full else SimulatorRollout(simulator, root, z0, encode)
+    replay = ReplayRollout(z0, true, planner.hold) if full else SimulatorRollout(simulator, root, z0, encode)
     g_true = planner.scores(z0, seqs, step_fn, reward_fn, intrinsic_fn, rollout=replay).cpu().numpy()
     if np.ptp(g_model) > 0 and np.ptp(g_true) > 0:
         from scipy.stats import spearmanr  # on first use: importing scipy.stats takes ~1 s

@@ -20,7 +20,10 @@ EncodeFn = Callable[[Tensor], Tensor]
 
 
 class Rollout(Protocol):
-    """The nodes of one depth of a search tree."""
+    """The nodes of one depth of a search tree.
+
+    ``hold`` (an optional attribute, 1 when absent): how many env steps one ``expand`` covers.
+    """
 
     def latents(self) -> Tensor:
         """(M, d) latents of the current depth's nodes."""
@@ -80,10 +83,11 @@ class SimulatorRollout:
 
 class ReplayRollout:
     """Tree latents computed before (one (A^k, d) tensor per depth k = 1..H, prefixes in lexicographic order), replayed
-    for a full enumeration, so that a tree expanded once can be scored again without stepping anything."""
+    for a full enumeration, so that a tree expanded once can be scored again without stepping anything. ``hold``: the
+    env steps one depth of ``levels`` covers (as the rollout that made them)."""
 
-    def __init__(self, z0: Tensor, levels: list[Tensor]) -> None:
-        self.z, self.levels, self.depth = z0.unsqueeze(0), levels, 0
+    def __init__(self, z0: Tensor, levels: list[Tensor], hold: int = 1) -> None:
+        self.z, self.levels, self.depth, self.hold = z0.unsqueeze(0), levels, 0, hold
 
     def latents(self) -> Tensor:
         return self.z
@@ -93,3 +97,36 @@ class ReplayRollout:
         assert len(parents) == len(self.z), "ReplayRollout replays the full enumeration only"
         self.depth += 1
         return self.z
+
+
+class HeldRollout:
+    """Each action held for ``hold`` env steps: one ``expand`` of this rollout is ``hold`` expands of ``inner`` with
+    the same actions, so a depth of the planner's tree is ``hold`` steps of the model or the simulator.
+
+    Args:
+        inner: a rollout whose ``expand`` is one env step.
+        hold: env steps per expand (>= 1).
+    """
+
+    def __init__(self, inner: Rollout, hold: int) -> None:
+        if hold < 1:
+            raise ValueError(f"hold must be >= 1, got {hold}")
+        if getattr(inner, "hold", 1) != 1:
+            raise ValueError(f"HeldRollout wraps a one-step rollout, got one holding {inner.hold} steps")  # type: ignore[attr-defined]
+        self.inner, self.hold = inner, int(hold)
+
+    def latents(self) -> Tensor:
+        return self.inner.latents()
+
+    def expand(self, parents: Tensor, actions: Tensor) -> Tensor:
+        z = self.inner.expand(parents, actions)
+        same = torch.arange(len(actions), device=parents.device)
+        for _ in range(self.hold - 1):
+            z = self.inner.expand(same, actions)
+        return z
+
+
+def held(rollout: Rollout, hold: int) -> Rollout:
+    """``rollout`` with each expand covering ``hold`` env steps: itself when it already does, else a
+    :class:`HeldRollout` around it."""
+    return rollout if getattr(rollout, "hold", 1) == hold else HeldRollout(rollout, hold)
