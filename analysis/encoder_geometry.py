@@ -10,7 +10,12 @@ standardised latents and of standardised physical features:
 - ``rho_all``: the env's state vector (Acrobot: cos θ1, sin θ1, cos θ2, sin θ2, θ̇1, θ̇2; MountainCar: x, ẋ);
 - ``rho_pose``: its pose part (every entry but the last P/2, P the physical state's length);
 - ``rho_velocity``: its velocity part (the last P/2 entries: the physical velocities);
-- ``knn``: the mean overlap of each state's 10 nearest neighbours in the latent and in the state vector.
+- ``knn``: the mean overlap of each state's 10 nearest neighbours in the latent and in the state vector;
+- ``rho_velocity_white``: ``rho_velocity`` with the latents whitened by their own covariance instead of standardised
+  per coordinate, so that a direction of small variance weighs as much as the largest;
+- ``r2_velocity_linear``: the share of the velocities' variance a least-squares linear map of the latent (with an
+  intercept) explains, fitted on the first half of the states and scored on the second half (1: the velocity is a
+  linear read-out of the latent; 0 or below: none of it is).
 
 With ``--train-iters N`` each encoder is first trained with the paper agent's world model (the config's losses and
 optimiser) for N gradient iterations on 600 random-policy transitions (data seed ``--data-seed`` + 1), as
@@ -97,15 +102,38 @@ def knn_overlap(a: np.ndarray, b: np.ndarray, k: int = 10) -> float:
     return float(np.mean([len(set(x) & set(y)) / k for x, y in zip(na, nb, strict=True)]))
 
 
+def whitened(x: np.ndarray) -> np.ndarray:
+    """Rows of ``x`` (n, D) centred and rotated onto their covariance's eigenvectors, each scaled to unit variance
+    (directions of (near) zero variance are left near zero)."""
+    x = x - x.mean(0)
+    evals, evecs = np.linalg.eigh(np.atleast_2d(np.cov(x, rowvar=False)))
+    return x @ evecs / np.sqrt(np.maximum(evals, 1e-12 * max(float(evals.max()), 1e-300)))
+
+
+def linear_r2(x: np.ndarray, y: np.ndarray) -> float:
+    """Held-out R² of a least-squares affine map from ``x`` (n, D) to ``y`` (n, K): fitted on the first n // 2 rows,
+    1 − SSE / SST (summed over the K outputs) on the rest."""
+    half = len(x) // 2
+    a = np.c_[x, np.ones(len(x))]
+    w, *_ = np.linalg.lstsq(a[:half], y[:half], rcond=None)
+    resid = y[half:] - a[half:] @ w
+    return float(1 - (resid**2).sum() / ((y[half:] - y[half:].mean(0)) ** 2).sum())
+
+
+METRICS = ("rho_all", "rho_pose", "rho_velocity", "knn", "rho_velocity_white", "r2_velocity_linear")
+
+
 def geometry(latents: np.ndarray, vectors: np.ndarray, n_velocity: int) -> dict[str, float]:
-    """The metrics of the module docstring: latents (n, d), state vectors (n, S), the last ``n_velocity`` entries of
-    which are velocities."""
+    """The metrics of the module docstring (:data:`METRICS`): latents (n, d), state vectors (n, S), the last
+    ``n_velocity`` entries of which are velocities."""
     z, v = _standardised(latents), _standardised(vectors)
-    dz = pairwise(z)
+    dz, dvel = pairwise(z), pairwise(v[:, -n_velocity:])
     return {"rho_all": float(spearmanr(dz, pairwise(v)).statistic),
             "rho_pose": float(spearmanr(dz, pairwise(v[:, :-n_velocity])).statistic),
-            "rho_velocity": float(spearmanr(dz, pairwise(v[:, -n_velocity:])).statistic),
-            "knn": knn_overlap(z, v)}  # fmt: skip
+            "rho_velocity": float(spearmanr(dz, dvel).statistic),
+            "knn": knn_overlap(z, v),
+            "rho_velocity_white": float(spearmanr(pairwise(whitened(latents)), dvel).statistic),
+            "r2_velocity_linear": linear_r2(latents, vectors[:, -n_velocity:])}  # fmt: skip
 
 
 def _encode(encoder: Callable[[torch.Tensor], torch.Tensor], obs: np.ndarray) -> np.ndarray:
@@ -148,7 +176,7 @@ def study(overrides: Sequence[str], seeds: Sequence[int], states: int = 400, dat
         torch.manual_seed(seed)
         encoder = trained_offline(cfg, train_iters, data_seed) if train_iters else build(cfg.encoder)
         rows.append({"seed": int(seed), **geometry(_encode(encoder, obs), vectors, n_velocity)})
-    mean = {k: float(np.mean([r[k] for r in rows])) for k in ("rho_all", "rho_pose", "rho_velocity", "knn")}
+    mean = {k: float(np.mean([r[k] for r in rows])) for k in METRICS}
     return {"overrides": list(overrides), "states": states, "data_seed": data_seed, "train_iters": train_iters,
             "rows": rows, "mean": mean}  # fmt: skip
 
@@ -176,9 +204,9 @@ def main(argv: list[str] | None = None) -> int:
     except (ConfigError, RestoreError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
-    print("| seed | rho_all | rho_pose | rho_velocity | knn |\n|---|---|---|---|---|")
+    print("| seed | " + " | ".join(METRICS) + " |\n" + "|---" * (len(METRICS) + 1) + "|")
     for r in [*out["rows"], {"seed": "mean", **out["mean"]}]:
-        print(f"| {r['seed']} | {r['rho_all']:.3f} | {r['rho_pose']:.3f} | {r['rho_velocity']:.3f} | {r['knn']:.3f} |")
+        print(f"| {r['seed']} | " + " | ".join(f"{r[k]:.3f}" for k in METRICS) + " |")
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(out, fh, indent=1)

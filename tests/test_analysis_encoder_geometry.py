@@ -22,6 +22,20 @@ def test_geometry_is_one_for_the_state_itself_and_about_zero_for_noise() -> None
     assert abs(noise["rho_all"]) < 0.1 and noise["knn"] < 0.25
 
 
+def test_velocity_read_out_finds_a_small_or_linear_velocity_that_distances_miss() -> None:
+    rng = np.random.default_rng(1)
+    vectors = rng.normal(size=(300, 4))  # two pose columns, two velocity columns
+    pose, velocity = vectors[:, :2], vectors[:, 2:]
+    mixed = np.c_[pose, 1e-3 * velocity] @ rng.normal(size=(4, 4))  # velocity in a tiny direction, rotated in
+    row = geo.geometry(mixed, vectors, n_velocity=2)
+    assert row["r2_velocity_linear"] == pytest.approx(1.0, abs=1e-6)  # a linear read-out finds it exactly
+    assert row["rho_velocity"] < 0.1 and row["rho_velocity_white"] > 0.4  # distances see it only once whitened
+    blind = geo.geometry(pose + 0.0, vectors, n_velocity=2)
+    assert abs(blind["r2_velocity_linear"]) < 0.15 and abs(blind["rho_velocity_white"]) < 0.1  # held out: ≈ 0, noisy
+    squared = geo.geometry(np.c_[pose, velocity**2], vectors, n_velocity=2)  # not linear in the velocity
+    assert squared["r2_velocity_linear"] < 0.1
+
+
 def test_knn_overlap_counts_shared_neighbours() -> None:
     a = np.arange(6, dtype=float)[:, None]
     assert geo.knn_overlap(a, a, k=2) == 1.0
