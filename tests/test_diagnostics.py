@@ -19,7 +19,7 @@ from curiosity.envs.mountaincar import directed as mountaincar
 from curiosity.envs.simulator import Simulator
 from curiosity.planning import MPCPlanner
 from curiosity.planning.probe import probe_model, tree_latents
-from curiosity.planning.rollout import LatentRollout, SimulatorRollout
+from curiosity.planning.rollout import HeldRollout, LatentRollout, SimulatorRollout
 from curiosity.runtime.behaviour import BehaviourTracker
 from curiosity.runtime.loop import run
 from tests.conftest import compose_cfg
@@ -119,6 +119,23 @@ def test_probe_gives_the_known_answers_for_an_exact_and_a_blind_model() -> None:
     blind = probe_model(planner, z0, blind_step, None, rightward, sim, root, Identity1D())
     assert blind["probe/effect_ratio/3"] == 0.0 and blind["probe/error/1"] > 0
     assert "probe/spearman" not in blind  # constant model scores: no rank correlation
+
+
+def test_held_simulator_rollout_encodes_only_the_held_step_it_returns() -> None:
+    sim, root, z0 = chain_root(30)
+    calls: list[int] = []
+
+    class Counting(Identity1D):
+        def forward(self, obs: torch.Tensor) -> torch.Tensor:
+            calls.append(len(obs))
+            return super().forward(obs)
+
+    held_tree = tree_latents(HeldRollout(SimulatorRollout(sim, root, z0, Counting()), 3), 3, 2)
+    assert calls == [3, 9]  # one encoding per depth (3 and 9 nodes), none for the two inner steps of each
+    stepped = tree_latents(SimulatorRollout(sim, root, z0, Identity1D()), 3, 6)  # the same steps, every one encoded
+    a, n = torch.arange(3), torch.arange(9)  # held prefixes (a) and (a, b), n = 3a + b, lexicographic
+    torch.testing.assert_close(held_tree[0], stepped[2][13 * a])  # one-step prefix a a a: index 9a + 3a + a
+    torch.testing.assert_close(held_tree[1], stepped[5][351 * (n // 3) + 13 * (n % 3)])  # a a a b b b
 
 
 def test_probe_with_held_actions_compares_held_futures() -> None:

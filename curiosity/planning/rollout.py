@@ -22,7 +22,9 @@ EncodeFn = Callable[[Tensor], Tensor]
 class Rollout(Protocol):
     """The nodes of one depth of a search tree.
 
-    ``hold`` (an optional attribute, 1 when absent): how many env steps one ``expand`` covers.
+    ``hold`` (an optional attribute, 1 when absent): how many env steps one ``expand`` covers. ``advance(parents,
+    actions)`` (an optional method): ``expand`` without computing the new latents, for steps whose latents nobody reads
+    (the inner steps of a :class:`HeldRollout`).
     """
 
     def latents(self) -> Tensor:
@@ -74,9 +76,12 @@ class SimulatorRollout:
     def latents(self) -> Tensor:
         return self.z
 
+    def advance(self, parents: Tensor, actions: Tensor) -> None:
+        """Step the simulator without encoding: :meth:`latents` is stale until the next :meth:`expand`."""
+        self.states, _ = self.simulator.step(self.states.take(parents.cpu().numpy()), actions.cpu().numpy())
+
     def expand(self, parents: Tensor, actions: Tensor) -> Tensor:
-        index = parents.cpu().numpy()
-        self.states, _ = self.simulator.step(self.states.take(index), actions.cpu().numpy())
+        self.advance(parents, actions)
         self.z = self.encode(torch.as_tensor(self.states.obs, device=self.z.device))
         return self.z
 
@@ -100,8 +105,10 @@ class ReplayRollout:
 
 
 class HeldRollout:
-    """Each action held for ``hold`` env steps: one ``expand`` of this rollout is ``hold`` expands of ``inner`` with
-    the same actions, so a depth of the planner's tree is ``hold`` steps of the model or the simulator.
+    """Each action held for ``hold`` env steps: one ``expand`` of this rollout is ``hold`` steps of ``inner`` with
+    the same actions, so a depth of the planner's tree is ``hold`` steps of the model or the simulator. Only the last
+    step's latents are computed where ``inner`` can step without them (``advance``: the simulator is not encoded at
+    the inner steps).
 
     Args:
         inner: a rollout whose ``expand`` is one env step.
@@ -119,11 +126,11 @@ class HeldRollout:
         return self.inner.latents()
 
     def expand(self, parents: Tensor, actions: Tensor) -> Tensor:
-        z = self.inner.expand(parents, actions)
+        step = getattr(self.inner, "advance", self.inner.expand)
         same = torch.arange(len(actions), device=parents.device)
-        for _ in range(self.hold - 1):
-            z = self.inner.expand(same, actions)
-        return z
+        for i in range(self.hold - 1):
+            step(parents if i == 0 else same, actions)
+        return self.inner.expand(parents if self.hold == 1 else same, actions)
 
 
 def held(rollout: Rollout, hold: int) -> Rollout:
