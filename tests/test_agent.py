@@ -372,6 +372,20 @@ def test_conv_with_random_features_trains_its_learned_part_only() -> None:
     assert all(not torch.equal(before[k], after[k]) for k in before if k.startswith("learned.") and "weight" in k)
 
 
+def test_the_conv_blur_option_is_the_conv_encoder_on_frames_blurred_with_sigma_4() -> None:
+    from curiosity.nets.preprocess import GaussianBlur
+
+    cfg = compose_cfg(["encoder=conv_blur"])
+    assert cfg.encoder.blur_sigma == 4.0 and cfg.method_label.startswith("ours-conv_blur-")
+    torch.manual_seed(0)
+    enc = build(cfg.encoder)
+    torch.manual_seed(0)
+    same = build(compose_cfg(["encoder=conv", "encoder.blur_sigma=4"]).encoder)
+    assert [type(m) for m in enc.preprocess] == [GaussianBlur] and enc.preprocess[0].radius == 12  # ⌈3σ⌉
+    obs = torch.rand(8, 4, 32, 32) * 2 - 1
+    torch.testing.assert_close(enc(obs), same(obs))  # same weights, same computation: the option only sets keys
+
+
 def test_a_frozen_encoder_is_standardised_at_the_first_training_call(tmp_path: Path) -> None:
     enc = build(compose_cfg(["encoder.frozen=true", "encoder.blur_sigma=4"]).encoder)
     obs = torch.rand(64, 4, 32, 32)
