@@ -269,7 +269,7 @@ def test_planner_commit_executes_the_chosen_sequence_before_planning_again() -> 
     from curiosity.envs import make_env
 
     cfg = compose_cfg(["env.renderer=fast", "budget=smoke", "budget.warmup_steps=4", "agent.batch_size=4", "planner.horizon=3",
-                       "planner.commit=3", "agent.probe_every=0"])  # fmt: skip
+                       "planner.commit=3", "planner.hold=1", "agent.probe_every=0"])  # fmt: skip
     agent = PaperAgent(cfg)
     env = make_env(cfg.env, 100)
     obs, _ = env.reset(seed=0)

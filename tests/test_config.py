@@ -57,6 +57,18 @@ def test_defaults_are_the_paper_agent_on_acrobot_pixels() -> None:
     cfg = compose_cfg()
     assert (cfg.env.id, cfg.env.obs.value, cfg.baseline.name, cfg.budget.name) == ("Acrobot-v1", "pixels", "none", "quick")
     assert cfg.budget.max_steps == 3000 and cfg.planner.name == "mpc" and cfg.estimator.name == "kde"
+    assert (cfg.encoder.name, cfg.encoder.blur_sigma, cfg.planner.hold) == ("conv_blur", 4.0, 4)  # the agent study's
+
+
+@pytest.mark.parametrize("preset", ["baseline=nsrs", "baseline=icm", "baseline=rnd", "+experiment=paper_text",
+                                    "+experiment=paper_code"])  # fmt: skip
+def test_the_papers_and_the_baselines_presets_keep_the_frames_as_they_are(preset: str) -> None:
+    cfg = compose_cfg([preset])
+    assert (cfg.encoder.name, cfg.encoder.blur_sigma) == ("conv", 0.0)
+    if preset == "+experiment=paper_text":
+        assert cfg.planner.hold == 1  # one action per env step, as the text plans
+    # a state encoder given on the command line still replaces the preset's
+    assert compose_cfg([preset, "env.obs=state", "encoder=mlp"]).encoder.name == "mlp"
 
 
 @pytest.mark.parametrize(
@@ -142,7 +154,7 @@ def test_bad_ranges_name_seed(arg: str) -> None:
     ("overrides", "message"),
     [
         (["encoder=mlp"], "encoder=mlp: takes state observations, but env=acrobot has env.obs=pixels"),
-        (["env.obs=state"], "encoder=conv: takes pixel observations"),
+        (["env.obs=state"], "encoder=conv_blur: takes pixel observations"),
         (["env=chain"], "allowed: encoder=mlp with env.obs=state"),
         (["env=chain", "encoder=mlp", "env.obs=pixels"], "env.obs=pixels: env=chain has no pixel observations"),
         (["planner.horizon=20"], "planner.horizon=20: 3^20 = 3486784401 candidate sequences exceed planner.max_candidates"),

@@ -102,7 +102,7 @@ OTHER = {
     "-m seed=3-1": Case(("-m", "seed=3-1"), "seed"),
     # groups that do not fit together, and a planner that cannot enumerate its candidates
     "encoder=mlp with pixels": Case(("encoder=mlp",), "encoder"),
-    "encoder=conv with env.obs=state": Case(("env.obs=state",), "encoder"),
+    "encoder=conv_blur (the default) with env.obs=state": Case(("env.obs=state",), "encoder"),
     "env=chain as listed": Case(("env=chain",), "encoder"),
     "env=chain with pixels": Case(("env=chain", "encoder=mlp", "env.obs=pixels"), "env.obs"),
     "planner.horizon=20": Case(("planner.horizon=20",), "planner.horizon"),
