@@ -202,12 +202,14 @@ def test_a_run_made_before_a_key_existed_reads_back_as_it_ran(tmp_path) -> None:
     cfg = compose_cfg(["seed=3"])
     now = OmegaConf.to_container(cfg)
     del now["intrinsic"]["terms"]["pe"]["imagined"], now["planner"]["model"], now["agent"]["probe_every"]
+    del now["planner"]["hold"]
     (tmp_path / ".hydra").mkdir()
     OmegaConf.save(OmegaConf.create(now), tmp_path / ".hydra" / "config.yaml")
     old = saved_config(tmp_path)
     assert cfg.intrinsic.terms.pe.imagined.name == "off" and LEGACY["intrinsic.terms.pe.imagined"] == "dropout"
     assert str(old.intrinsic.terms.pe.imagined) in ("dropout", "PEImagined.dropout")
     assert str(old.planner.model) in ("learned", "PlannerModel.learned") and old.agent.probe_every == 0
+    assert cfg.planner.hold == 4 and old.planner.hold == 1  # runs before planner.hold held no action
     assert old.seed == 3 and old.agent.transition_dropout == cfg.agent.transition_dropout  # saved keys are kept as saved
     now["intrinsic"]["terms"]["pe"]["imagined"] = "off"
     OmegaConf.save(OmegaConf.create(now), tmp_path / ".hydra" / "config.yaml")

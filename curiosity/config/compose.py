@@ -105,6 +105,7 @@ LEGACY: dict[str, Any] = {
     "planner.temperature_scale": "absolute",
     "planner.sample_candidates": False,
     "planner.commit": 1,
+    "planner.hold": 1,
     "agent.updates": "joint",
     "agent.q_intrinsic": "batch",
     "agent.first_call_min_iterations": 0,

@@ -80,7 +80,9 @@ def planning_at(memory: int, repeats: int, queries: int = 2048, overrides: Seque
     """At a memory of ``memory`` rows: ms per planning step, ms per memory refresh, and the error of the configured
     estimator's log ρ (``overrides``, e.g. a reservoir) against the exact KDE over every row with the bandwidth of
     every row (chunked logsumexp), at ``queries`` perturbed rows."""
-    agent, obs, latents, actions = filled_agent(["planner.commit=1", *overrides], memory)  # every act() plans
+    # every act() plans: one action per plan, held one step (with the default planner.hold=4 an act() would replay the
+    # held action for 3 steps; the novelty scores of a plan are the same count, 243 x 5, whatever the hold)
+    agent, obs, latents, actions = filled_agent(["planner.commit=1", "planner.hold=1", *overrides], memory)
     cur = agent.novelty
     assert cur is not None
     big = len(cur.memory) >= 10_000  # a refresh re-encodes every stored row: time it once
