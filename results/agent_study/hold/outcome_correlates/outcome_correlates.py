@@ -5,7 +5,8 @@ pushing with the motion (behaviour/directed) over the run and over its first 200
 periodic model probe's Spearman correlation and first-action agreement (probe/spearman, probe/agree). Prints the
 Spearman correlation of each with steps-to-goal over all runs.
 
-    cd results/agent_study/hold/outcome_correlates && python outcome_correlates.py > output.txt
+    PYTHONPATH=. python results/agent_study/hold/outcome_correlates/outcome_correlates.py > \
+        results/agent_study/hold/outcome_correlates/output.txt
 """
 
 from __future__ import annotations
@@ -16,6 +17,8 @@ from pathlib import Path
 import pandas as pd
 from scipy import stats
 
+from analysis.collect import run_dirs
+
 HERE = Path(__file__).resolve().parent.parent
 DIRS = ("default_hold4_blur4", "default_hold4_blur4_heldout", "default_commit2", "default_first1000", "default_iters8",
         "default_ensemble5")  # fmt: skip
@@ -24,11 +27,12 @@ DIRS = ("default_hold4_blur4", "default_hold4_blur4_heldout", "default_commit2",
 def run_rows() -> pd.DataFrame:
     rows = []
     for name in DIRS:
-        for summary in sorted((HERE / name).rglob("summary.json")):
+        for run in run_dirs(HERE / name):
+            summary = run / "summary.json"
             s = json.loads(summary.read_text())
             if s["steps_to_goal"] is None:
                 raise SystemExit(f"{summary}: no goal within the cap; this script expects every run to reach it")
-            m = pd.read_csv(summary.with_name("metrics.csv"))
+            m = pd.read_csv(run / "metrics.csv")
             probed = m.dropna(subset=["probe/spearman"])
             rows.append({
                 "dir": name, "seed": s["seed"], "steps": s["steps_to_goal"],
