@@ -46,6 +46,17 @@ def test_blur_distance_grows_with_the_displacement_where_raw_frames_saturate():
     assert blurred[0] < blurred[1] < blurred[2]
 
 
+@pytest.mark.parametrize("sigma", [1.0, 4.0, 6.0])
+@pytest.mark.parametrize("shape", [(5, 4, 32, 32), (2, 3, 64, 64), (1, 2, 8, 20)])
+def test_blur_as_band_matrices_equals_the_two_padded_convolutions(sigma: float, shape: tuple[int, ...]):
+    # the same sums in another order: equal to float rounding (tolerance), not bit for bit; frames smaller than the
+    # kernel (8 x 20 with radius 18) included
+    frames = torch.rand(shape, generator=torch.Generator().manual_seed(0)) * 2 - 1
+    blur = GaussianBlur(sigma)
+    torch.testing.assert_close(blur(frames), blur.reference(frames), rtol=1e-5, atol=1e-5)
+    torch.testing.assert_close(blur(frames.double()), blur.reference(frames.double()), rtol=1e-10, atol=1e-10)
+
+
 def test_blur_rejects_a_non_positive_sigma():
     with pytest.raises(ValueError, match="sigma"):
         GaussianBlur(0.0)

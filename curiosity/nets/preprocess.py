@@ -25,6 +25,11 @@ class GaussianBlur(nn.Module):
     the trained agent's latent collapsed (log det −27.6) for twice as long as without the blur; ``keep_contrast``
     multiplies the blurred deviation from the background by √(2π)σ, so a straight line one pixel wide keeps its peak.
 
+    The blur along an axis of length n is one (n, n) banded matrix (row i holds the kernel centred on i, cut where
+    the zero padding would be), so a frame is blurred as ``B_h @ x @ B_wᵀ``: the same sums as two zero-padded 1-D
+    convolutions (:meth:`reference`, to float rounding), as two matrix products, about 10× faster on a CPU than the
+    convolutions at 32 × 32 (they were about a third of the default's training iteration).
+
     Args:
         sigma: standard deviation in pixels; the kernel has radius ⌈3σ⌉.
         background: the level of the frame's background.
@@ -42,9 +47,29 @@ class GaussianBlur(nn.Module):
         self.radius = radius
         self.background = background
         self.gain = math.sqrt(2 * math.pi) * sigma if keep_contrast else 1.0
+        self._bands: dict[tuple[int, torch.dtype, torch.device], Tensor] = {}
+
+    def band(self, n: int, dtype: torch.dtype, device: torch.device) -> Tensor:
+        """The (n, n) matrix of the blur along an axis of length n: ``[i, j] = kernel[j − i + radius]`` where
+        ``|j − i| ≤ radius``, else 0 (the zero padding)."""
+        key = (n, dtype, device)
+        if key not in self._bands:
+            offset = torch.arange(n).view(1, n) - torch.arange(n).view(n, 1) + self.radius  # j − i + radius
+            inside = (offset >= 0) & (offset <= 2 * self.radius)
+            taps = self.kernel.to("cpu", torch.float64)[offset.clamp(0, 2 * self.radius)]
+            self._bands[key] = torch.where(inside, taps, 0.0).to(device, dtype)
+        return self._bands[key]
 
     def forward(self, frames: Tensor) -> Tensor:
         """Blur ``frames`` (B, C, H, W) per channel; returns (B, C, H, W)."""
+        h, w = frames.shape[-2:]
+        x = frames - self.background
+        x = self.band(h, x.dtype, x.device) @ x @ self.band(w, x.dtype, x.device).T
+        return x * self.gain + self.background
+
+    def reference(self, frames: Tensor) -> Tensor:
+        """The same blur as two zero-padded 1-D convolutions (how it was first written; kept to test the matrices
+        against)."""
         b, c, h, w = frames.shape
         x = (frames - self.background).reshape(b * c, 1, h, w)
         k = self.kernel.to(x.dtype)
