@@ -8,6 +8,10 @@ mechanical energy in (the env adapter's ``energy``), so for each variant it prin
 between the novelty return and the energy the sequence ends with, how often that correlation is positive, and how
 often the novelty-best first action is the energy-best one (1/3 by chance with three actions).
 
+``--step N [N …]`` (or ``--step all``) restores the run at the checkpoints it kept along the way (runs made with
+``checkpoint_keep=true``: ``checkpoints/step=<n>.pt`` every ``checkpoint_every`` steps) instead of its last one, so the
+landscape can be followed before the goal; the table then has one row per step and variant.
+
 A run that ended at the goal is checkpointed in its terminal state; there, and whenever the walk reaches the goal, the
 env is reset and the walk goes on from the start state with the same agent (model and memory as checkpointed), so a
 finished run gives its ``--states`` states too.
@@ -31,6 +35,7 @@ from curiosity.envs.simulator import Simulator
 from curiosity.novelty.estimators import KDENovelty, KNNNovelty
 from curiosity.planning.probe import tree_latents
 from curiosity.planning.rollout import ReplayRollout, SimulatorRollout, held
+from curiosity.runtime.checkpoint import kept_checkpoints
 from curiosity.runtime.restore import RestoreError, restore_run
 
 
@@ -65,10 +70,11 @@ def _ended_at_goal(run_dir: Path, step: int) -> bool:
 
 
 def landscape(run_dir: str | Path, states: int = 20, bandwidths: tuple[float, ...] = (2.0, 0.5),
-              k: int = 5) -> dict[str, dict[str, float]]:  # fmt: skip
+              k: int = 5, checkpoint: Path | None = None) -> dict[str, dict[str, float]]:  # fmt: skip
     """Per variant: ``rho`` (mean Spearman of novelty return and final energy), ``positive`` (fraction of states
-    with rho > 0), ``first_action`` (fraction where the novelty-best first action is the energy-best one)."""
-    run = restore_run(run_dir)
+    with rho > 0), ``first_action`` (fraction where the novelty-best first action is the energy-best one). From the
+    run's last checkpoint, or from the checkpoint file ``checkpoint`` of that run."""
+    run = restore_run(run_dir) if checkpoint is None else restore_run(run_dir, checkpoint)
     energy = adapter_of(run.cfg.env).energy
     agent, env, obs, step = run.agent, run.env, run.obs, run.step
     if _ended_at_goal(Path(run_dir), step):
@@ -114,20 +120,47 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--states", type=int, default=20, help="states along the agent's policy (default 20)")
     parser.add_argument("--bandwidths", type=float, nargs="+", default=[2.0, 0.5], help="KDE multipliers of the median NN")
     parser.add_argument("--k", type=int, default=5, help="neighbours of the kNN variant")
+    parser.add_argument("--step", nargs="+", metavar="N", help="restore at these kept checkpoints (env steps), or 'all' "
+                        "of them (runs made with checkpoint_keep=true), instead of the last checkpoint")  # fmt: skip
     args = parser.parse_args(argv)
     if args.states < 1 or args.k < 1 or min(args.bandwidths) <= 0:
         print("error: --states and --k must be >= 1 and --bandwidths > 0", file=sys.stderr)
         return 2
     try:
-        result = landscape(args.run_dir, args.states, tuple(args.bandwidths), args.k)
+        at = _checkpoints(Path(args.run_dir), args.step)
+        results = {step: landscape(args.run_dir, args.states, tuple(args.bandwidths), args.k, path)
+                   for step, path in at.items()}  # fmt: skip
     except RestoreError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
-    print("| novelty | mean Spearman(novelty return, final energy) | states with a positive one | best first action = "
-          "energy-best |\n|---|---|---|---|")  # fmt: skip
-    for name, r in result.items():
-        print(f"| {name} | {r['rho']:.2f} | {r['positive']:.2f} | {r['first_action']:.2f} (of {r['states']:.0f}) |")
+    steps = args.step is not None
+    print(("| step " if steps else "") + "| novelty | mean Spearman(novelty return, final energy) | states with a "
+          "positive one | best first action = energy-best |\n" + ("|---" if steps else "") + "|---|---|---|---|")  # fmt: skip
+    for step, result in results.items():
+        for name, r in result.items():
+            print((f"| {step} " if steps else "") + f"| {name} | {r['rho']:.2f} | {r['positive']:.2f} | "
+                  f"{r['first_action']:.2f} (of {r['states']:.0f}) |")  # fmt: skip
     return 0
+
+
+def _checkpoints(run_dir: Path, steps: list[str] | None) -> dict[int | None, Path | None]:
+    """{step: kept checkpoint} for ``--step`` (``{None: None}``: the last checkpoint)."""
+    if steps is None:
+        return {None: None}
+    kept = kept_checkpoints(run_dir)
+    if steps == ["all"]:
+        if not kept:
+            raise RestoreError(f"{run_dir}: --step all: the run kept no checkpoints (it ran without "
+                               "checkpoint_keep=true)")  # fmt: skip
+        return dict(kept)
+    out: dict[int | None, Path | None] = {}
+    for value in steps:
+        step = int(value) if value.isdigit() else None
+        if step not in kept:
+            allowed = ", ".join(map(str, kept)) or "none: the run ran without checkpoint_keep=true"
+            raise RestoreError(f"{run_dir}: --step {value}: no kept checkpoint at that step; allowed: all, {allowed}")
+        out[step] = kept[step]
+    return out
 
 
 if __name__ == "__main__":

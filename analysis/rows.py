@@ -23,7 +23,16 @@ from curiosity.config.compose import saved_config
 
 # Keys that change neither the agent nor the environment, and keys derived from others (the action count follows
 # env.id and env.distractor, which name the row): left out of a row's identity.
-IGNORED = ("seed", "progress", "threads", "resume", "checkpoint_every", "env.n_actions", "planner.n_actions")
+IGNORED = (
+    "seed",
+    "progress",
+    "threads",
+    "resume",
+    "checkpoint_every",
+    "checkpoint_keep",
+    "env.n_actions",
+    "planner.n_actions",
+)
 
 
 def flat_config(run_dir: str | Path) -> dict[str, object]:

@@ -304,6 +304,36 @@ def test_landscape_command_reports_every_variant_and_refuses_the_chain(
     assert "Acrobot or MountainCar" in capsys.readouterr().err
 
 
+def test_kept_checkpoints_restore_the_run_along_the_way_for_the_landscape(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from analysis.landscape import main
+    from curiosity.runtime.checkpoint import kept_checkpoints, read_checkpoint
+    from curiosity.runtime.restore import restore_run
+
+    run_dir = tmp_path / "run"
+    cfg = compose_cfg([*FAST, "agent.probe_every=0", "planner.horizon=2", "checkpoint_every=20", "checkpoint_keep=true"])
+    finished_run(cfg, run_dir)
+    kept = kept_checkpoints(run_dir)
+    assert list(kept) == [20, 40, 60, 80]  # every periodic checkpoint of the 90-step run; the final one is not kept
+    assert [read_checkpoint(path)["step"] for path in kept.values()] == [20, 40, 60, 80]  # later writes left them
+    assert restore_run(run_dir, kept[60]).step == 60 and restore_run(run_dir).step == 90
+    assert main([str(run_dir), "--states", "1", "--bandwidths", "2", "--step", "40", "60"]) == 0
+    rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| 40 |") or line.startswith("| 60 |")]
+    assert len(rows) == 2 * 2  # two steps x (KDE at h = 2x, kNN)
+    assert main([str(run_dir), "--step", "30"]) == 2
+    assert "allowed: all, 20, 40, 60, 80" in capsys.readouterr().err
+    kept[80].unlink()
+    kept[80].write_bytes(b"not a checkpoint")
+    assert main([str(run_dir), "--step", "80"]) == 2
+    assert "step=80.pt: cannot be read" in capsys.readouterr().err
+    plain = tmp_path / "plain"
+    finished_run(compose_cfg([*FAST, "agent.probe_every=0", "planner.horizon=2", "checkpoint_every=20"]), plain)
+    assert kept_checkpoints(plain) == {} and not (plain / "checkpoints").exists()
+    assert main([str(plain), "--step", "all"]) == 2
+    assert "checkpoint_keep=true" in capsys.readouterr().err
+
+
 def test_landscape_walks_on_from_the_start_after_the_goal(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """A run checkpointed at the goal (its terminal state) and a walk that reaches the goal: the env is reset and the
     walk goes on, so every requested state is scored."""

@@ -438,6 +438,7 @@ class Config:
     progress: bool = True
     resume: bool = True  # re-running the same command on an existing run directory resumes its checkpoint
     checkpoint_every: int = 500  # env steps between checkpoints (also written at the end and on SIGTERM/SIGINT)
+    checkpoint_keep: bool = False  # true: also keep each periodic checkpoint as checkpoints/step=<n>.pt
     method_label: str = "${baseline.label}"
     agent: AgentKeysConfig = field(default_factory=AgentKeysConfig)
 

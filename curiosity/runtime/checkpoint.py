@@ -1,7 +1,9 @@
 """Checkpoints of a whole run, written atomically, and the guard that keeps two writers out of one run directory.
 
 Writing a checkpoint keeps the one it replaces as ``checkpoint.prev.pt``; when ``checkpoint.pt`` cannot be read
-(truncated, empty, not a checkpoint), the run resumes from the previous one and says so in its log.
+(truncated, empty, not a checkpoint), the run resumes from the previous one and says so in its log. With
+``checkpoint_keep=true`` a run also keeps each periodic checkpoint as ``checkpoints/step=<n>.pt`` (:func:`keep_checkpoint`),
+for analysis along the run (``python -m analysis.landscape RUN_DIR --step N``); resuming never reads them.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ log = logging.getLogger(__name__)
 
 CHECKPOINT = "checkpoint.pt"
 PREVIOUS = "checkpoint.prev.pt"
+KEPT = "checkpoints"  # the kept periodic checkpoints of checkpoint_keep=true: KEPT/step=<n>.pt
 LOCK = "run.lock"
 _KEYS = ("config", "step", "finished")  # what every checkpoint of a run holds
 
@@ -60,6 +63,46 @@ def save_checkpoint(run_dir: str | Path, state: dict[str, Any]) -> Path:
         os.replace(path, path.with_name(PREVIOUS))
     os.replace(tmp, path)
     return path
+
+
+def keep_checkpoint(run_dir: str | Path, step: int) -> Path:
+    """Keep the checkpoint just written as ``run_dir/checkpoints/step=<step>.pt`` (a hard link where the file system
+    allows it, else a copy; the run's next checkpoint replaces ``checkpoint.pt`` by a rename, so the kept file never
+    changes)."""
+    import shutil
+
+    src = Path(run_dir) / CHECKPOINT
+    dst = Path(run_dir) / KEPT / f"step={step}.pt"
+    dst.parent.mkdir(exist_ok=True)
+    dst.unlink(missing_ok=True)  # a resumed run passes the same step again: the same state, written again
+    try:
+        os.link(src, dst)
+    except OSError:
+        shutil.copyfile(src, dst)
+    return dst
+
+
+def kept_checkpoints(run_dir: str | Path) -> dict[int, Path]:
+    """The run's kept checkpoints {env step: path}, in step order (empty when it kept none)."""
+    found = {}
+    for path in (Path(run_dir) / KEPT).glob("step=*.pt"):
+        try:
+            found[int(path.stem.removeprefix("step="))] = path
+        except ValueError:
+            continue
+    return dict(sorted(found.items()))
+
+
+def read_checkpoint(path: str | Path) -> dict[str, Any]:
+    """One checkpoint file (a kept one, or ``checkpoint.pt``).
+
+    Raises:
+        CheckpointError: naming the file, when it cannot be read.
+    """
+    state, problem = _read(Path(path))
+    if state is None:
+        raise CheckpointError(f"{path}: cannot be read ({problem}); allowed: a file written by a run's checkpoint")
+    return state
 
 
 def _read(path: Path) -> tuple[dict[str, Any] | None, str]:

@@ -25,7 +25,14 @@ from curiosity.envs.state import env_state, restore_env
 from curiosity.errors import NumericalFault, RunDirectoryError
 from curiosity.runtime.allocator import keep_freed_memory
 from curiosity.runtime.behaviour import BehaviourTracker
-from curiosity.runtime.checkpoint import RunLock, load_checkpoint, rng_states, save_checkpoint, set_rng_states
+from curiosity.runtime.checkpoint import (
+    RunLock,
+    keep_checkpoint,
+    load_checkpoint,
+    rng_states,
+    save_checkpoint,
+    set_rng_states,
+)
 from curiosity.runtime.logger import RunLogger
 from curiosity.runtime.seeding import seed_everything
 from curiosity.runtime.summary import RunSummary, git_commit
@@ -34,7 +41,7 @@ log = logging.getLogger(__name__)
 
 CHART_KEYS = ("charts/coverage", "charts/wall_time", "charts/sps", "charts/extrinsic_reward", "intrinsic/reward")
 # Keys that do not change what a run computes: a run may resume with other values of them.
-VOLATILE_KEYS = ("progress", "threads", "device", "resume", "checkpoint_every")
+VOLATILE_KEYS = ("progress", "threads", "device", "resume", "checkpoint_every", "checkpoint_keep")
 
 
 class Interrupted(KeyboardInterrupt):
@@ -266,6 +273,8 @@ class _Run:
                     bar.update(self.step - bar.n)
                 if self.step % cfg.checkpoint_every == 0 and not done:
                     self.save(finished=False)
+                    if cfg.checkpoint_keep:
+                        keep_checkpoint(self.run_dir, self.step)
                 if self.stop_signal is not None and not done:
                     self.save(finished=False)
                     raise Interrupted(self.stop_signal, self.step)
