@@ -9,8 +9,9 @@ between the novelty return and the energy the sequence ends with, how often that
 often the novelty-best first action is the energy-best one (1/3 by chance with three actions).
 
 ``--step N [N …]`` (or ``--step all``) restores the run at the checkpoints it kept along the way (runs made with
-``checkpoint_keep=true``: ``checkpoints/step=<n>.pt`` every ``checkpoint_every`` steps) instead of its last one, so the
-landscape can be followed before the goal; the table then has one row per step and variant.
+``checkpoint_keep=true``: ``checkpoints/step=<n>.pt`` every ``checkpoint_every`` steps; those of the warm-up, before
+the agent acts, are left out) instead of its last one, so the landscape can be followed before the goal; the table
+then has one row per step and variant.
 
 A run that ended at the goal is checkpointed in its terminal state; there, and whenever the walk reaches the goal, the
 env is reset and the walk goes on from the start state with the same agent (model and memory as checkpointed), so a
@@ -35,6 +36,7 @@ from curiosity.envs.simulator import Simulator
 from curiosity.novelty.estimators import KDENovelty, KNNNovelty
 from curiosity.planning.probe import tree_latents
 from curiosity.planning.rollout import ReplayRollout, SimulatorRollout, held
+from curiosity.config.compose import saved_config
 from curiosity.runtime.checkpoint import kept_checkpoints
 from curiosity.runtime.restore import RestoreError, restore_run
 
@@ -144,20 +146,25 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _checkpoints(run_dir: Path, steps: list[str] | None) -> dict[int | None, Path | None]:
-    """{step: kept checkpoint} for ``--step`` (``{None: None}``: the last checkpoint)."""
+    """{step: kept checkpoint} for ``--step`` (``{None: None}``: the last checkpoint). Only checkpoints from the
+    end of the warm-up on: before it the agent has not acted (nor fitted its novelty) yet."""
     if steps is None:
         return {None: None}
-    kept = kept_checkpoints(run_dir)
+    try:
+        warmup = int(saved_config(run_dir).budget.warmup_steps)
+    except Exception:  # no or an unreadable config: restore_run says so
+        warmup = 0
+    kept = {step: path for step, path in kept_checkpoints(run_dir).items() if step >= warmup}
     if steps == ["all"]:
         if not kept:
-            raise RestoreError(f"{run_dir}: --step all: the run kept no checkpoints (it ran without "
-                               "checkpoint_keep=true)")  # fmt: skip
+            raise RestoreError(f"{run_dir}: --step all: the run kept no checkpoints after its {warmup} warm-up steps "
+                               "(kept every checkpoint_every steps when it ran with checkpoint_keep=true)")  # fmt: skip
         return dict(kept)
     out: dict[int | None, Path | None] = {}
     for value in steps:
         step = int(value) if value.isdigit() else None
         if step not in kept:
-            allowed = ", ".join(map(str, kept)) or "none: the run ran without checkpoint_keep=true"
+            allowed = ", ".join(map(str, kept)) or f"none after the {warmup} warm-up steps (checkpoint_keep=true)"
             raise RestoreError(f"{run_dir}: --step {value}: no kept checkpoint at that step; allowed: all, {allowed}")
         out[step] = kept[step]
     return out

@@ -322,7 +322,8 @@ def test_kept_checkpoints_restore_the_run_along_the_way_for_the_landscape(
     rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| 40 |") or line.startswith("| 60 |")]
     assert len(rows) == 2 * 2  # two steps x (KDE at h = 2x, kNN)
     assert main([str(run_dir), "--step", "30"]) == 2
-    assert "allowed: all, 20, 40, 60, 80" in capsys.readouterr().err
+    assert "allowed: all, 40, 60, 80" in capsys.readouterr().err  # 20: within the 40 warm-up steps, not acted yet
+    assert main([str(run_dir), "--step", "20"]) == 2
     kept[80].unlink()
     kept[80].write_bytes(b"not a checkpoint")
     assert main([str(run_dir), "--step", "80"]) == 2
@@ -332,6 +333,11 @@ def test_kept_checkpoints_restore_the_run_along_the_way_for_the_landscape(
     assert kept_checkpoints(plain) == {} and not (plain / "checkpoints").exists()
     assert main([str(plain), "--step", "all"]) == 2
     assert "checkpoint_keep=true" in capsys.readouterr().err
+    for path in kept_checkpoints(run_dir).values():
+        if path.name != "step=20.pt":
+            path.unlink()  # only the warm-up's checkpoint left: nothing to walk from
+    assert main([str(run_dir), "--step", "all"]) == 2
+    assert "no checkpoints after its 40 warm-up steps" in capsys.readouterr().err
 
 
 def test_landscape_walks_on_from_the_start_after_the_goal(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
