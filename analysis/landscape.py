@@ -76,7 +76,7 @@ def landscape(run_dir: str | Path, states: int = 20, bandwidths: tuple[float, ..
     """Per variant: ``rho`` (mean Spearman of novelty return and final energy), ``positive`` (fraction of states
     with rho > 0), ``first_action`` (fraction where the novelty-best first action is the energy-best one). From the
     run's last checkpoint, or from the checkpoint file ``checkpoint`` of that run."""
-    run = restore_run(run_dir) if checkpoint is None else restore_run(run_dir, checkpoint)
+    run = restore_run(run_dir, checkpoint)
     energy = adapter_of(run.cfg.env).energy
     agent, env, obs, step = run.agent, run.env, run.obs, run.step
     if _ended_at_goal(Path(run_dir), step):

@@ -353,8 +353,8 @@ def test_landscape_walks_on_from_the_start_after_the_goal(tmp_path: Path, monkey
     resets = []
     restore = landscape_module.restore_run
 
-    def restore_at_goal(run_dir):
-        restored = restore(run_dir)
+    def restore_at_goal(run_dir, checkpoint=None):
+        restored = restore(run_dir, checkpoint)
         env, real_step, real_reset = restored.env, restored.env.step, restored.env.reset
 
         def step_to_goal(action):  # every step reaches the goal
