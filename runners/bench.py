@@ -1,10 +1,11 @@
 """Speed benchmark: ``python -m runners.bench [--quick] [--json FILE]``.
 
 Measures on this machine, with the real components and configs (speed targets are checked here, never in tests):
-env steps per second per observation pipeline; ms per training iteration of the default agent per batch size and
-its speed-up over another commit measured side by side (``--baseline-commit``); ms per planning step and per memory
-refresh and the error of log ρ against exact KDE at memory sizes N; the speed-up of a 4-job sweep with two joblib
-workers over one; and whole seeds of the default agent alone: wall time, steps-to-goal and wall share by part.
+env steps per second per observation pipeline; ms per training iteration of the default agent per batch size, its
+speed-up over another commit measured side by side (``--baseline-commit``) and where its time goes (operator shares
+of a ``torch.profiler`` run); ms per planning step and per memory refresh and the error of log ρ against exact KDE at
+memory sizes N; the speed-up of a 4-job sweep with two joblib workers over one; and whole seeds of the default agent
+alone: wall time, steps-to-goal and wall share by part.
 Prints Markdown tables with the machine description. ``--quick`` (under 3 minutes) shrinks every measurement.
 """
 
@@ -23,6 +24,7 @@ from curiosity.config import setup
 from curiosity.runtime.allocator import keep_freed_memory
 from runners.benchmark.baseline import speedup_vs
 from runners.benchmark.components import env_steps_per_s, planning_at, train_iter_ms
+from runners.benchmark.iteration_profile import train_iter_profile
 from runners.benchmark.runs import seed_runs, sweep_speedup
 from runners.benchmark.timing import machine
 
@@ -84,6 +86,7 @@ def measure(args: argparse.Namespace, seed_dir: Path) -> dict[str, Any]:
     res["train_iter_baseline"] = base
     res["train_iter_speedup_vs_baseline"] = base["speedup"]
     res["train_iter_speedup_same_allocator"] = base["speedup_same_allocator"]
+    res["train_iter_profile"] = train_iter_profile(default_batch, args.repeats)
     res.update(_by_memory({n: planning_at(n, args.repeats) for n in args.memory}))
     size = args.reservoir
     reservoir = ["intrinsic.terms.novelty.memory_mode=reservoir", f"intrinsic.terms.novelty.memory_size={size}",
@@ -118,6 +121,14 @@ def report(res: dict[str, Any]) -> str:
               f"{b['commit']} (side by side): speed-up {b['speedup']:.2f}x; with the same allocator setting for "
               f"both, {b['ms_same_allocator']:.1f} vs {b['baseline_ms_same_allocator']:.1f} ms: "
               f"{b['speedup_same_allocator']:.2f}x"]  # fmt: skip
+    p = res["train_iter_profile"]
+    lines += ["", f"where an iteration at batch {p['batch']} goes (torch.profiler, {p['iterations']} iterations, "
+              f"{p['ms_per_iteration']:.1f} ms each under the profiler): convolutions forward "
+              f"{p['conv_forward_share']:.0%}, backward {p['conv_backward_share']:.0%}; "
+              f"{p['conv_forward_gflop_per_iteration']:.2f} GFLOP of forward convolutions per iteration, the "
+              f"convolutions at ~{p['conv_gflop_per_s_estimate']:.0f} GFLOP/s (3 x forward FLOPs / their time)",
+              "", "| operator | share of self time |", "|---|---|"]  # fmt: skip
+    lines += [f"| {k} | {v:.1%} |" for k, v in p["op_share"].items()]
     lines += ["", "| memory N | ms per planning step | ms per refresh | log rho error median / p99 |", "|---|---|---|---|"]
     for n, ms in res["plan_step_ms"].items():
         e = res["novelty_log_rho_error"][n]

@@ -12,6 +12,7 @@ import pytest
 import runners.benchmark.timing as timing
 from runners.bench import parse, report
 from runners.benchmark.components import planning_at
+from runners.benchmark.iteration_profile import summarise, train_iter_profile
 from runners.benchmark.runs import seed_runs
 from runners.benchmark.timing import PartTimer
 
@@ -114,6 +115,16 @@ def test_parse_defaults_and_report_render() -> None:
             "refresh_ms": {1000: 4.0},
             "novelty_log_rho_error": {1000: {"median": 0.1, "p99": 0.5}},
         },
+        "train_iter_profile": {
+            "batch": 64,
+            "iterations": 20,
+            "ms_per_iteration": 12.0,
+            "op_share": {"aten::convolution_backward": 0.5, "other": 0.5},
+            "conv_forward_share": 0.25,
+            "conv_backward_share": 0.5,
+            "conv_forward_gflop_per_iteration": 0.63,
+            "conv_gflop_per_s_estimate": 40.0,
+        },
         "sweep": {"jobs": 4, "one_job_s": 10.0, "two_jobs_s": 5.5, "speedup": 1.82},
         "seeds": [{"seed": 100, "steps_to_goal": 200, "wall_s": 100.0}],
         "wall_share": {"train": 0.5, "other": 0.5},
@@ -122,6 +133,33 @@ def test_parse_defaults_and_report_render() -> None:
     assert "speed-up 2.50x" in text and "10.0 vs 15.0 ms: 1.50x" in text
     assert "| 100 | 200 | 100 |" in text and "train 50.0%" in text
     assert "| 1,000 (reservoir 500, float32) | 2.0 | 4.0 | 0.1 / 0.5 |" in text
+    assert "convolutions forward 25%, backward 50%" in text and "| aten::convolution_backward | 50.0% |" in text
+
+
+class Event:
+    def __init__(self, key: str, self_us: float, flops: int = 0) -> None:
+        self.key, self.self_cpu_time_total, self.flops = key, self_us, flops
+
+
+def test_profile_summary_shares_and_convolution_rate() -> None:
+    """Self times 600 + 300 + 100 µs over 2 iterations: shares of their sum, the top ones named and the rest
+    ``other``; the forward convolutions' 2 GFLOP (counted on ``aten::conv2d``, whose own self time is small) give
+    3 × 2 GFLOP / 0.9 ms."""
+    events = [Event("aten::convolution_backward", 600.0), Event("aten::mkldnn_convolution", 300.0),
+              Event("aten::conv2d", 0.0, flops=2_000_000_000), Event("aten::tanh", 100.0)]  # fmt: skip
+    out = summarise(events, iterations=2, wall_s=0.004, top=2)
+    assert out["op_share"] == pytest.approx({"aten::convolution_backward": 0.6, "aten::mkldnn_convolution": 0.3,
+                                             "other": 0.1})  # fmt: skip
+    assert out["conv_forward_share"] == pytest.approx(0.3) and out["conv_backward_share"] == pytest.approx(0.6)
+    assert out["ms_per_iteration"] == pytest.approx(2.0) and out["conv_forward_gflop_per_iteration"] == 1.0
+    assert out["conv_gflop_per_s_estimate"] == pytest.approx(3 * 2.0 / 0.0009)
+
+
+def test_train_iter_profile_of_the_default_agent_finds_its_convolutions() -> None:
+    out = train_iter_profile(batch=4, iterations=1)
+    assert sum(out["op_share"].values()) == pytest.approx(1.0)
+    assert out["conv_forward_share"] > 0 and out["conv_backward_share"] > 0  # the conv encoder, forward and backward
+    assert out["conv_forward_gflop_per_iteration"] > 0 and out["conv_gflop_per_s_estimate"] > 0
 
 
 def test_baseline_commit_is_timed_from_its_own_worktree_and_removed() -> None:
