@@ -21,7 +21,6 @@ finished run gives its ``--states`` states too.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from collections.abc import Callable
 from pathlib import Path
@@ -31,13 +30,12 @@ import torch
 from scipy.stats import spearmanr
 from torch import Tensor
 
+from analysis.checkpoints import checkpoints_at, ended_at_goal
 from curiosity.envs import adapter_of
 from curiosity.envs.simulator import Simulator
 from curiosity.novelty.estimators import KDENovelty, KNNNovelty
 from curiosity.planning.probe import tree_latents
 from curiosity.planning.rollout import ReplayRollout, SimulatorRollout, held
-from curiosity.config.compose import saved_config
-from curiosity.runtime.checkpoint import kept_checkpoints
 from curiosity.runtime.restore import RestoreError, restore_run
 
 
@@ -62,15 +60,6 @@ def _variants(agent, bandwidths: list[float], k: int) -> dict[str, Callable[[Ten
     return out
 
 
-def _ended_at_goal(run_dir: Path, step: int) -> bool:
-    """Whether the run reached the goal at the checkpoint's step (the env is terminal there), from its summary."""
-    path = run_dir / "summary.json"
-    if not path.is_file():
-        return False
-    summary = json.loads(path.read_text())
-    return summary.get("steps_to_goal") == step  # None when it never reached it; a run past the goal was reset
-
-
 def landscape(run_dir: str | Path, states: int = 20, bandwidths: tuple[float, ...] = (2.0, 0.5),
               k: int = 5, checkpoint: Path | None = None) -> dict[str, dict[str, float]]:  # fmt: skip
     """Per variant: ``rho`` (mean Spearman of novelty return and final energy), ``positive`` (fraction of states
@@ -79,7 +68,7 @@ def landscape(run_dir: str | Path, states: int = 20, bandwidths: tuple[float, ..
     run = restore_run(run_dir, checkpoint)
     energy = adapter_of(run.cfg.env).energy
     agent, env, obs, step = run.agent, run.env, run.obs, run.step
-    if _ended_at_goal(Path(run_dir), step):
+    if ended_at_goal(Path(run_dir), step):
         obs, _ = env.reset()
         agent.queue = []  # the rest of a committed sequence belongs to the episode that ended
     if energy is None or not hasattr(agent, "planner") or agent.q is not None:
@@ -129,7 +118,7 @@ def main(argv: list[str] | None = None) -> int:
         print("error: --states and --k must be >= 1 and --bandwidths > 0", file=sys.stderr)
         return 2
     try:
-        at = _checkpoints(Path(args.run_dir), args.step)
+        at = checkpoints_at(Path(args.run_dir), args.step)
         results = {step: landscape(args.run_dir, args.states, tuple(args.bandwidths), args.k, path)
                    for step, path in at.items()}  # fmt: skip
     except RestoreError as err:
@@ -143,31 +132,6 @@ def main(argv: list[str] | None = None) -> int:
             print((f"| {step} " if steps else "") + f"| {name} | {r['rho']:.2f} | {r['positive']:.2f} | "
                   f"{r['first_action']:.2f} (of {r['states']:.0f}) |")  # fmt: skip
     return 0
-
-
-def _checkpoints(run_dir: Path, steps: list[str] | None) -> dict[int | None, Path | None]:
-    """{step: kept checkpoint} for ``--step`` (``{None: None}``: the last checkpoint). Only checkpoints from the
-    end of the warm-up on: before it the agent has not acted (nor fitted its novelty) yet."""
-    if steps is None:
-        return {None: None}
-    try:
-        warmup = int(saved_config(run_dir).budget.warmup_steps)
-    except Exception:  # no or an unreadable config: restore_run says so
-        warmup = 0
-    kept = {step: path for step, path in kept_checkpoints(run_dir).items() if step >= warmup}
-    if steps == ["all"]:
-        if not kept:
-            raise RestoreError(f"{run_dir}: --step all: the run kept no checkpoints after its {warmup} warm-up steps "
-                               "(kept every checkpoint_every steps when it ran with checkpoint_keep=true)")  # fmt: skip
-        return dict(kept)
-    out: dict[int | None, Path | None] = {}
-    for value in steps:
-        step = int(value) if value.isdigit() else None
-        if step not in kept:
-            allowed = ", ".join(map(str, kept)) or f"none after the {warmup} warm-up steps (checkpoint_keep=true)"
-            raise RestoreError(f"{run_dir}: --step {value}: no kept checkpoint at that step; allowed: all, {allowed}")
-        out[step] = kept[step]
-    return out
 
 
 if __name__ == "__main__":

@@ -6,6 +6,11 @@ policy reaches (acting without learning, every ``--every`` steps), encodes the t
 those states of (:mod:`curiosity.planning.probe`): the predicted and the true action effect and their ratio at each
 depth, the model's latent error, the Spearman correlation between planner scores from the model and from the true
 futures, and how often the best first action agrees. ``--json FILE`` writes the per-state values and the means.
+
+``--step N [N …]`` (or ``--step all``) probes at the checkpoints the run kept along the way (``checkpoint_keep=true``;
+those of the warm-up left out) instead of its last one, and prints one row per step. At a checkpoint taken at the goal
+(a terminal env), and whenever the walk reaches the goal, the env is reset and the walk goes on from the start state
+with the same agent.
 """
 
 from __future__ import annotations
@@ -18,14 +23,17 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from analysis.checkpoints import checkpoints_at, ended_at_goal
 from curiosity.envs.simulator import Simulator
 from curiosity.planning.probe import probe_model
 from curiosity.runtime.restore import RestoreError, restore_run
 
 
-def probe_run(run_dir: str | Path, states: int = 8, every: int = 5) -> list[dict[str, float]]:
-    """Probe results at ``states`` states of the run, from its checkpoint on (see the module docstring)."""
-    run = restore_run(run_dir)
+def probe_run(run_dir: str | Path, states: int = 8, every: int = 5,
+              checkpoint: Path | None = None) -> list[dict[str, float]]:  # fmt: skip
+    """Probe results at ``states`` states of the run, from its last checkpoint on, or from the checkpoint file
+    ``checkpoint`` of that run (see the module docstring)."""
+    run = restore_run(run_dir, checkpoint)
     agent, env = run.agent, run.env
     if getattr(agent, "q", True) is not None or not hasattr(agent, "planner"):
         raise RestoreError(f"{run_dir}: the probe needs the paper's agent with planner=mpc (this run: "
@@ -33,6 +41,9 @@ def probe_run(run_dir: str | Path, states: int = 8, every: int = 5) -> list[dict
     torch.set_num_threads(1)
     agent.env, agent.simulator = env, Simulator(run.cfg.env)
     model, obs, step, out = agent.model, run.obs, run.step, []
+    if ended_at_goal(Path(run_dir), step):
+        obs, _ = env.reset()
+        agent.queue = []  # the rest of a committed sequence belongs to the episode that ended
     for i in range(states):
         with model.evaluating():
             z0 = model.encode(torch.as_tensor(obs).unsqueeze(0))[0]
@@ -42,7 +53,8 @@ def probe_run(run_dir: str | Path, states: int = 8, every: int = 5) -> list[dict
             obs, _, terminated, _, _ = env.step(agent.act(obs, step))
             step += 1
             if terminated:
-                return out
+                obs, _ = env.reset()
+                agent.queue = []
     return out
 
 
@@ -65,21 +77,47 @@ def _table(avg: dict[str, float], n: int) -> str:
     return "\n".join(lines)
 
 
+def _step_table(results: dict[int | None, list[dict[str, float]]]) -> str:
+    """One row per kept checkpoint: the means over its states of the ranking, the agreement, and the action effect and
+    latent error at the first and the deepest depth."""
+    lines = ["| step | states | Spearman(model, true futures) | best first action agrees | effect ratio at depth 1 / H "
+             "| latent error at depth 1 / H |", "|---|---|---|---|---|---|"]  # fmt: skip
+    for step, per_state in results.items():
+        avg = means(per_state)
+        depths = sorted({int(k.rsplit("/", 1)[1]) for k in avg if k.startswith("probe/effect_true/")})
+        one, deep = depths[0], depths[-1]
+        ratio = [avg.get(f"probe/effect_ratio/{k}", float("nan")) for k in (one, deep)]
+        lines.append(f"| {step} | {len(per_state)} | {avg.get('probe/spearman', float('nan')):.3f} | "
+                     f"{avg['probe/agree']:.2f} | {ratio[0]:.3f} / {ratio[1]:.3f} | "
+                     f"{avg[f'probe/error/{one}']:.4g} / {avg[f'probe/error/{deep}']:.4g} |")  # fmt: skip
+    return "\n".join(lines)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("run_dir")
     parser.add_argument("--states", type=int, default=8, help="states to probe (default 8)")
     parser.add_argument("--every", type=int, default=5, help="agent steps between probed states (default 5)")
     parser.add_argument("--json", type=Path, help="write per-state results and means to this file")
+    parser.add_argument("--step", nargs="+", metavar="N", help="probe at these kept checkpoints (env steps), or 'all' "
+                        "of them (runs made with checkpoint_keep=true), instead of the last checkpoint")  # fmt: skip
     args = parser.parse_args(argv)
     if args.states < 1 or args.every < 1:
         print("error: --states and --every must be >= 1", file=sys.stderr)
         return 2
     try:
-        results = probe_run(args.run_dir, args.states, args.every)
+        at = checkpoints_at(Path(args.run_dir), args.step)
+        by_step = {step: probe_run(args.run_dir, args.states, args.every, path) for step, path in at.items()}
     except RestoreError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
+    if args.step is not None:
+        print(_step_table(by_step))
+        if args.json:
+            steps = {str(step): {"states": r, "means": means(r)} for step, r in by_step.items()}
+            args.json.write_text(json.dumps({"steps": steps}, indent=2) + "\n")
+        return 0
+    results = by_step[None]
     avg = means(results)
     print(_table(avg, len(results)))
     if args.json:

@@ -340,10 +340,16 @@ def test_kept_checkpoints_restore_the_run_along_the_way_for_the_landscape(
     assert "no checkpoints after its 40 warm-up steps" in capsys.readouterr().err
 
 
-def test_landscape_walks_on_from_the_start_after_the_goal(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+@pytest.mark.parametrize("command", ["landscape", "probe"])
+def test_landscape_and_probe_walk_on_from_the_start_after_the_goal(
+    command: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """A run checkpointed at the goal (its terminal state) and a walk that reaches the goal: the env is reset and the
     walk goes on, so every requested state is scored."""
     import analysis.landscape as landscape_module
+    import analysis.probe as probe_module
+
+    module = landscape_module if command == "landscape" else probe_module
 
     finished_run(compose_cfg([*FAST, "agent.probe_every=0", "planner.horizon=2"]), tmp_path / "run")
     summary_path = tmp_path / "run" / "summary.json"
@@ -351,7 +357,7 @@ def test_landscape_walks_on_from_the_start_after_the_goal(tmp_path: Path, monkey
     summary["steps_to_goal"] = summary["env_steps"]  # as if the last step had reached the goal
     summary_path.write_text(json.dumps(summary))
     resets = []
-    restore = landscape_module.restore_run
+    restore = module.restore_run
 
     def restore_at_goal(run_dir, checkpoint=None):
         restored = restore(run_dir, checkpoint)
@@ -368,10 +374,30 @@ def test_landscape_walks_on_from_the_start_after_the_goal(tmp_path: Path, monkey
         env.step, env.reset = step_to_goal, counted_reset
         return restored
 
-    monkeypatch.setattr(landscape_module, "restore_run", restore_at_goal)
-    result = landscape_module.landscape(tmp_path / "run", states=3, bandwidths=(2.0,))
-    assert all(r["states"] == 3 for r in result.values())
-    assert len(resets) == 1 + 3  # the terminal checkpoint, then after each step's goal
+    monkeypatch.setattr(module, "restore_run", restore_at_goal)
+    if command == "landscape":
+        result = landscape_module.landscape(tmp_path / "run", states=3, bandwidths=(2.0,))
+        assert all(r["states"] == 3 for r in result.values())
+        assert len(resets) == 1 + 3  # the terminal checkpoint, then after each step's goal
+    else:
+        assert len(probe_module.probe_run(tmp_path / "run", states=3, every=1)) == 3
+        assert len(resets) == 1 + 2  # the terminal checkpoint, then after each step between probed states
+
+
+def test_probe_follows_the_kept_checkpoints(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from analysis.probe import main
+
+    run_dir = tmp_path / "run"
+    cfg = compose_cfg([*FAST, "agent.probe_every=0", "planner.horizon=2", "checkpoint_every=20", "checkpoint_keep=true"])
+    finished_run(cfg, run_dir)
+    assert main([str(run_dir), "--states", "2", "--every", "1", "--step", "40", "80", "--json", str(tmp_path / "p.json")]) == 0
+    rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith(("| 40 |", "| 80 |"))]
+    assert len(rows) == 2 and all(row.split("|")[2].strip() == "2" for row in rows)  # two states at each step
+    saved = json.loads((tmp_path / "p.json").read_text())["steps"]
+    assert set(saved) == {"40", "80"} and all(len(v["states"]) == 2 and "probe/agree" in v["means"] for v in saved.values())
+    assert main([str(run_dir), "--step", "30"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "allowed: all, 40, 60, 80" in err[0]
 
 
 def test_diagnostics_do_not_change_what_the_agent_does(tmp_path: Path) -> None:
