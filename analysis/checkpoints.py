@@ -1,10 +1,11 @@
 """Which checkpoint of a run the diagnostics restore (``--step N …|all`` of ``analysis.landscape`` and
-``analysis.probe``), and whether the run's env is terminal there."""
+``analysis.probe``), and where their walk along the agent's policy starts and goes on after the goal."""
 
 from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 from curiosity.config.compose import saved_config
 from curiosity.runtime.checkpoint import kept_checkpoints
@@ -48,3 +49,17 @@ def ended_at_goal(run_dir: Path, step: int) -> bool:
         return False
     summary = json.loads(path.read_text())
     return summary.get("steps_to_goal") == step  # None when it never reached it; a run past the goal was reset
+
+
+def new_episode(env: Any, agent: Any) -> Any:
+    """Reset ``env`` after the goal and drop the rest of the agent's committed sequence (it belongs to the episode
+    that ended); returns the new first observation."""
+    obs, _ = env.reset()
+    agent.queue = []
+    return obs
+
+
+def walk_start(run_dir: Path, run: Any) -> Any:
+    """The observation a diagnostic's walk starts from in a restored run (``restore_run``): the checkpoint's, or the
+    start of a new episode when the checkpoint was taken at the goal (a terminal env)."""
+    return new_episode(run.env, run.agent) if ended_at_goal(run_dir, run.step) else run.obs

@@ -30,7 +30,7 @@ import torch
 from scipy.stats import spearmanr
 from torch import Tensor
 
-from analysis.checkpoints import checkpoints_at, ended_at_goal
+from analysis.checkpoints import checkpoints_at, new_episode, walk_start
 from curiosity.envs import adapter_of
 from curiosity.envs.simulator import Simulator
 from curiosity.novelty.estimators import KDENovelty, KNNNovelty
@@ -67,10 +67,7 @@ def landscape(run_dir: str | Path, states: int = 20, bandwidths: tuple[float, ..
     run's last checkpoint, or from the checkpoint file ``checkpoint`` of that run."""
     run = restore_run(run_dir, checkpoint)
     energy = adapter_of(run.cfg.env).energy
-    agent, env, obs, step = run.agent, run.env, run.obs, run.step
-    if ended_at_goal(Path(run_dir), step):
-        obs, _ = env.reset()
-        agent.queue = []  # the rest of a committed sequence belongs to the episode that ended
+    agent, env, obs, step = run.agent, run.env, walk_start(Path(run_dir), run), run.step
     if energy is None or not hasattr(agent, "planner") or agent.q is not None:
         raise RestoreError(f"{run_dir}: the landscape needs the paper's agent with planner=mpc on Acrobot or MountainCar")
     torch.set_num_threads(1)
@@ -97,8 +94,7 @@ def landscape(run_dir: str | Path, states: int = 20, bandwidths: tuple[float, ..
         obs, _, terminated, _, _ = env.step(agent.act(obs, step))
         step += 1
         if terminated:
-            obs, _ = env.reset()
-            agent.queue = []
+            obs = new_episode(env, agent)
     return {name: {"rho": float(np.mean(rho[name])) if rho[name] else float("nan"),
                    "positive": float(np.mean(np.array(rho[name]) > 0)) if rho[name] else float("nan"),
                    "first_action": float(np.mean(hit[name])), "states": float(len(hit[name]))}

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from analysis.checkpoints import checkpoints_at, ended_at_goal
+from analysis.checkpoints import checkpoints_at, new_episode, walk_start
 from curiosity.envs.simulator import Simulator
 from curiosity.planning.probe import probe_model
 from curiosity.runtime.restore import RestoreError, restore_run
@@ -40,10 +40,7 @@ def probe_run(run_dir: str | Path, states: int = 8, every: int = 5,
                            f"baseline={run.cfg.baseline.name}, planner={run.cfg.planner.name})")  # fmt: skip
     torch.set_num_threads(1)
     agent.env, agent.simulator = env, Simulator(run.cfg.env)
-    model, obs, step, out = agent.model, run.obs, run.step, []
-    if ended_at_goal(Path(run_dir), step):
-        obs, _ = env.reset()
-        agent.queue = []  # the rest of a committed sequence belongs to the episode that ended
+    model, obs, step, out = agent.model, walk_start(Path(run_dir), run), run.step, []
     for i in range(states):
         with model.evaluating():
             z0 = model.encode(torch.as_tensor(obs).unsqueeze(0))[0]
@@ -53,8 +50,7 @@ def probe_run(run_dir: str | Path, states: int = 8, every: int = 5,
             obs, _, terminated, _, _ = env.step(agent.act(obs, step))
             step += 1
             if terminated:
-                obs, _ = env.reset()
-                agent.queue = []
+                obs = new_episode(env, agent)
     return out
 
 
