@@ -5,6 +5,7 @@ pair's runs whose value differs between them (``seed`` and the bookkeeping keys 
 the default agent, one with ``planner.horizon=5 planner.temperature=0``, become the rows
 ``ours-… [planner.horizon=3, planner.temperature=0.02]`` and ``ours-… [planner.horizon=5, planner.temperature=0]``.
 ``group_by`` names the keys instead (dotted config paths, e.g. ``entropy.name``); ``pool`` merges rows explicitly.
+No row counts a seed twice: where another preset ran the same config and seed again, the row is split by directory.
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ from __future__ import annotations
 import fnmatch
 import functools
 import json
+import os
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -108,7 +110,8 @@ def distinguishing_keys(configs: Sequence[dict[str, object]]) -> list[str]:
 
 
 def label_rows(runs: pd.DataFrame, group_by: Sequence[str] = ()) -> pd.DataFrame:
-    """``runs`` with a ``row`` column: the method label plus its distinguishing keys, or the ``group_by`` keys' values."""
+    """``runs`` with a ``row`` column: the method label plus its distinguishing keys (a row repeating a seed split by
+    directory, :func:`_split_repeated_seeds`), or the ``group_by`` keys' values."""
     runs = runs.copy()
     labels = pd.Series("", index=runs.index, dtype=object)
     for (_env, method), g in runs.groupby(["env", "method"], sort=True):
@@ -117,7 +120,40 @@ def label_rows(runs: pd.DataFrame, group_by: Sequence[str] = ()) -> pd.DataFrame
             extra = ", ".join(f"{k}={_value(cfg, k)}" for k in keys)
             labels[i] = f"{method} [{extra}]" if extra and not group_by else (extra if group_by else method)
     runs["row"] = labels
+    if not group_by:  # named keys group across methods and configs on purpose; a repeated seed is then no repeat
+        runs["row"] = _split_repeated_seeds(runs)
     return runs
+
+
+def _split_repeated_seeds(runs: pd.DataFrame) -> pd.Series:
+    """Row labels where no row holds one seed twice: a row in which two runs have the same seed (the same config run
+    again by another preset, e.g. a benchmark repeating Table 1's seeds) is split by where its runs live, the first
+    directories below the row's common path that tell the repeats apart, as ``label (table1)`` and
+    ``label (bench/seeds_078a391)``. Rows without a repeated seed keep their label."""
+    labels = runs["row"].copy()
+    for (_env, _row), g in runs.groupby(["env", "row"], sort=False):
+        if not g["seed"].duplicated().any():
+            continue
+        paths = [Path(d).parts for d in g["run_dir"]]
+        base = len(Path(os.path.commonpath(g["run_dir"].tolist())).parts)
+        source = g["run_dir"]
+        for depth in range(1, max(len(p) for p in paths) - base + 1):
+            source = pd.Series(["/".join(p[base : base + depth]) for p in paths], index=g.index)
+            if not pd.DataFrame({"s": source, "seed": g["seed"]}).duplicated().any():
+                break
+        short = {src: _shortest_prefix(src, set(source)) for src in set(source)}
+        labels[g.index] = [f"{row} ({short[src]})" for row, src in zip(g["row"], source, strict=True)]
+    return labels
+
+
+def _shortest_prefix(source: str, sources: set[str]) -> str:
+    """The fewest leading directories of ``source`` that no other of ``sources`` starts with."""
+    parts = source.split("/")
+    for n in range(1, len(parts)):
+        prefix = "/".join(parts[:n])
+        if not any(o != source and (o == prefix or o.startswith(prefix + "/")) for o in sources):
+            return prefix
+    return source
 
 
 def pool_rows(runs: pd.DataFrame, pools: Sequence[str]) -> pd.DataFrame:

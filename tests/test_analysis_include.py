@@ -126,3 +126,23 @@ def test_flat_config_is_read_once_and_again_when_the_file_changes(tmp_path: Path
     assert "horizon: " in text
     config.write_text(text.replace("horizon: ", "horizon: 7 #", 1))
     assert flat_config(run)["planner.horizon"] == 7
+
+
+def test_no_row_counts_a_seed_twice_runs_of_the_same_config_and_seed_are_split_by_directory(tmp_path: Path) -> None:
+    """A parent directory holding two presets that ran the same config on the same seeds (a benchmark repeating a
+    table's seeds): the repeated row is split by the shortest directory that tells its runs apart; a row without a
+    repeated seed keeps its label."""
+    for seed in range(4):
+        make_run(tmp_path / "table1", "acrobot", "random", seed, 1000 + seed, behaviour=False)
+    for name in ("seeds_a", "seeds_b"):
+        for seed in range(2):
+            make_run(tmp_path / "bench" / name, "acrobot", "random", seed, 2000 + seed, behaviour=False)
+    make_run(tmp_path / "bench" / "seeds_a", "acrobot", "nsrs", 0, 500)
+    make_run(tmp_path / "table1", "acrobot", "nsrs", 1, 600)
+    assert _rows(tmp_path) == {
+        "nsrs": [500.0, 600.0],  # seeds 0 and 1: no repeat, one row over both directories
+        "random (bench/seeds_a)": [2000.0, 2001.0],
+        "random (bench/seeds_b)": [2000.0, 2001.0],
+        "random (table1)": [1000.0, 1001.0, 1002.0, 1003.0],
+    }
+    assert _rows(tmp_path / "table1") == {"nsrs": [600.0], "random": [1000.0, 1001.0, 1002.0, 1003.0]}
