@@ -1,7 +1,7 @@
 """Which table row each run belongs to, decided from its resolved ``.hydra/config.yaml`` (never from directory names).
 
-A row is (env, method label) plus the config keys that distinguish runs of that pair: every key present in all of the
-pair's runs whose value differs between them (``seed`` and the bookkeeping keys in ``IGNORED`` left out). Two runs of
+A row is (env, method label) plus the config keys that distinguish runs of that pair: every key whose value differs
+between the pair's runs that have it (``seed`` and the bookkeeping keys in ``IGNORED`` left out). Two runs of
 the default agent, one with ``planner.horizon=5 planner.temperature=0``, become the rows
 ``ours-… [planner.horizon=3, planner.temperature=0.02]`` and ``ours-… [planner.horizon=5, planner.temperature=0]``.
 ``group_by`` names the keys instead (dotted config paths, e.g. ``entropy.name``); ``pool`` merges rows explicitly.
@@ -104,9 +104,10 @@ def _value(config: dict[str, object], key: str) -> str:
 
 
 def distinguishing_keys(configs: Sequence[dict[str, object]]) -> list[str]:
-    """The keys present in every config whose values are not all equal (``IGNORED`` left out), sorted."""
-    common = set.intersection(*(set(c) for c in configs)) - set(IGNORED)
-    return sorted(k for k in common if len({repr(c[k]) for c in configs}) > 1)
+    """The keys whose values are not all equal among the configs that have them (``IGNORED`` left out), sorted. A key
+    only some configs have (``encoder.blur_sigma`` of a conv encoder beside an MLP's) still tells the others apart."""
+    keys = set().union(*(set(c) for c in configs)) - set(IGNORED)
+    return sorted(k for k in keys if len({repr(c[k]) for c in configs if k in c}) > 1)
 
 
 def label_rows(runs: pd.DataFrame, group_by: Sequence[str] = ()) -> pd.DataFrame:

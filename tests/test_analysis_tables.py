@@ -12,7 +12,7 @@ import pandas as pd
 import pytest
 from scipy import stats
 
-from analysis.rows import label_rows, load_runs, pool_rows
+from analysis.rows import distinguishing_keys, label_rows, load_runs, pool_rows
 from analysis.stats import iqm_ci
 from analysis.tables import paper_numbers, steps_table, write_tables
 from tests.synthetic_runs import RENYI, RENYI_MI, make_run, make_runs
@@ -36,6 +36,15 @@ def test_rows_come_from_the_config_not_the_directory(root) -> None:
     assert rows == ["nsrs", "nsrs [planner.horizon=3]", "nsrs [planner.horizon=5]", RENYI, RENYI_MI, "random"]
     by_entropy = sorted(set(label_rows(load_runs(root), ["entropy.name"])["row"]))
     assert by_entropy == ["entropy.name=none", "entropy.name=renyi", "entropy.name=renyi_mi"]  # across methods
+
+
+def test_a_key_only_some_runs_have_still_tells_those_runs_apart() -> None:
+    """Blurred and unblurred conv-encoder runs beside an MLP-encoder run (which has no ``encoder.blur_sigma``): the
+    blur still separates the conv runs; a key with one value wherever it is present separates nothing."""
+    conv = {"encoder.name": "conv", "encoder.blur_sigma": 0.0, "seed": 0}
+    configs = [conv, {**conv, "encoder.blur_sigma": 4.0, "seed": 1}, {"encoder.name": "mlp", "seed": 2}]
+    assert distinguishing_keys(configs) == ["encoder.blur_sigma", "encoder.name"]
+    assert distinguishing_keys([conv, {"encoder.name": "mlp", "seed": 0}]) == ["encoder.name"]
 
 
 def test_censored_runs_count_at_their_cap_and_successes_apart(table: pd.DataFrame) -> None:
