@@ -13,7 +13,9 @@ and *not supported* otherwise (weak evidence: a small sample rarely finds a diff
 are, reversed when any is reversed, and not supported otherwise; comparisons shown beside a claim (Table 1's other
 readings of the paper's agent and the oracle-model planner) are tested the same way but do not enter its verdict. No
 correction for multiple comparisons. A claim whose table is missing, has a row short of its seeds or lists unfinished
-runs gets no verdict (``pending``).
+runs gets no verdict (``pending``). For a value at an env step (the spread of Figure 6), a row's seeds are its finished
+runs (``steps_to_goal.csv``): a run that reached the goal before that step has no value there, so the test is over
+the runs still going at the step, and the verdict says how many those are.
 """
 
 from __future__ import annotations
@@ -134,6 +136,16 @@ def _load(report: Path, readout: str) -> pd.DataFrame | str:
     return table
 
 
+def _finished_runs(report: Path, row: str) -> int | None:
+    """The finished runs of ``row`` in the preset's ``steps_to_goal.csv``, or None where it has no such row."""
+    path = report / READOUTS["steps"][0]
+    if not path.is_file():
+        return None
+    table = pd.read_csv(path)
+    found = table[table["row"] == row]
+    return int(found["seeds"].iloc[0]) if len(found) == 1 else None
+
+
 def _unfinished(report: Path) -> int:
     path = report / "incomplete.csv"
     return len(pd.read_csv(path)) if path.is_file() else 0
@@ -150,13 +162,17 @@ def compare(results: Path, claim: Claim, c: Comparison) -> dict[str, object]:
     if missing:
         return out | {"verdict": PENDING, "why": missing[0]}
     a, b = (seed_values(r["per_seed"]) for r in rows)  # type: ignore[index]
-    short = [f"{r['row']}: {len(v)} of {n} seeds" for r, v, n in zip(rows, (a, b), (c.seeds, c.seeds_b or c.seeds),
-                                                                       strict=True) if len(v) != n]  # fmt: skip
+    runs = [len(a), len(b)]
+    if READOUTS[c.readout][2] is not None:  # a value at an env step: the runs that ended before it have none
+        runs = [_finished_runs(report, r["row"]) or len(v) for r, v in zip(rows, (a, b), strict=True)]  # type: ignore[index]
+    short = [f"{r['row']}: {k} of {n} seeds" for r, k, n in zip(rows, runs, (c.seeds, c.seeds_b or c.seeds),
+                                                                  strict=True) if k != n]  # fmt: skip
     if unfinished := _unfinished(report):
         short.append(f"{unfinished} unfinished run(s) in {claim.preset}")
     verdict, p = judge(c.relation, a, b)
     for key, r, v in (("a", rows[0], a), ("b", rows[1], b)):  # the table's own mean and SE, printed as it has them
         out |= {f"{key}_row": r["row"], f"{key}_n": len(v), f"{key}_mean": r["mean"], f"{key}_se": r["se"]}  # type: ignore[index]
+        out[f"{key}_runs"] = runs[0 if key == "a" else 1]
         if "iqm" in r:  # type: ignore[operator]
             out |= {f"{key}_iqm": r["iqm"], f"{key}_iqm_low": r["iqm_low"], f"{key}_iqm_high": r["iqm_high"]}  # type: ignore[index]
     return out | {"welch_p": p, "verdict": PENDING if short else verdict, "why": "; ".join(short)}
@@ -174,7 +190,9 @@ def verdicts(results: Path) -> pd.DataFrame:
 def _side(r: pd.Series, key: str) -> str:
     if pd.isna(r.get(f"{key}_n")):
         return "–"
-    text = f"`{r[f'{key}_row']}`: {fmt(r[f'{key}_mean'], '.1f')} ± {fmt(r[f'{key}_se'], '.1f')} (n = {int(r[f'{key}_n'])})"
+    n, runs = int(r[f"{key}_n"]), r.get(f"{key}_runs", math.nan)
+    ended = "" if pd.isna(runs) or int(runs) == n else f" of {int(runs)} runs; {int(runs) - n} ended before the step"
+    text = f"`{r[f'{key}_row']}`: {fmt(r[f'{key}_mean'], '.1f')} ± {fmt(r[f'{key}_se'], '.1f')} (n = {n}{ended})"
     if not pd.isna(r.get(f"{key}_iqm", math.nan)):
         low, high = (fmt(float(r[f"{key}_iqm_{end}"]), ".1f") for end in ("low", "high"))
         text += f", IQM {fmt(float(r[f'{key}_iqm']), '.1f')} [{low}, {high}]"

@@ -11,7 +11,7 @@ from scipy import stats
 
 from analysis.tables import write_tables
 from analysis.verdicts import (CLAIMS, NOT_SUPPORTED, OURS, PENDING, REVERSED, SUPPORTED, claim_verdict, judge,
-                               seed_values, verdicts)  # fmt: skip
+                               seed_values, to_markdown, verdicts)  # fmt: skip
 from tests.synthetic_runs import make_run
 from tests.test_analysis import analysis
 
@@ -85,3 +85,30 @@ def test_the_command_writes_the_verdicts_and_refuses_a_missing_directory(tmp_pat
     assert "**Table 1: supported**" in text and "**Table 2: pending**" in text
     bad = analysis("verdicts", tmp_path / "nowhere")
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "no such directory" in bad.stderr
+
+
+def _fig6(root: Path, gaussian_finished: int) -> Path:
+    """results/fig6/report with the tables Figure 6's claim reads: the Rényi arm's spread at env step 200 on 6 runs,
+    the Gaussian potential's on 5 (its sixth run reached the goal before step 200), ``gaussian_finished`` runs of it."""
+    report = root / "fig6" / "report"
+    report.mkdir(parents=True)
+    renyi, gauss = "ours-conv_blur-renyi-kde-backward_off-mpc", "ours-conv_blur-gaussian_potential-kde-backward_off-mpc"
+    spread = pd.DataFrame({"env": "acrobot", "row": [renyi, gauss], "step": 200,
+                           "per_seed": ["7.0 6.2 6.9 7.3 5.4 5.6", "6.0 4.8 3.9 4.5 4.6"], "n": [6, 5],
+                           "mean": [6.4, 4.76], "se": [0.3, 0.34]})  # fmt: skip
+    spread.to_csv(report / "spread.csv", index=False)
+    finished = pd.DataFrame({"env": "acrobot", "row": [renyi, gauss], "seeds": [6, gaussian_finished]})
+    finished.to_csv(report / "steps_to_goal.csv", index=False)
+    return root
+
+
+def test_a_value_at_a_step_counts_the_finished_runs_and_tests_those_still_going(tmp_path: Path) -> None:
+    """Figure 6 compares the spread at env step 200: a run that reached the goal earlier has no value there and does
+    not hold the claim pending; a run not yet finished does."""
+    fig6 = verdicts(_fig6(tmp_path / "done", gaussian_finished=6)).set_index("claim").loc["Figure 6"]
+    assert (fig6.verdict, fig6.a_n, fig6.b_n, fig6.b_runs, fig6.why) == (SUPPORTED, 6, 5, 6, "")
+    assert fig6.welch_p == pytest.approx(stats.ttest_ind([7.0, 6.2, 6.9, 7.3, 5.4, 5.6], [6.0, 4.8, 3.9, 4.5, 4.6],
+                                                         equal_var=False).pvalue, rel=1e-12)  # fmt: skip
+    assert "(n = 5 of 6 runs; 1 ended before the step)" in to_markdown(verdicts(tmp_path / "done"))
+    waiting = verdicts(_fig6(tmp_path / "running", gaussian_finished=5)).set_index("claim").loc["Figure 6"]
+    assert waiting.verdict == PENDING and waiting.why.endswith("gaussian_potential-kde-backward_off-mpc: 5 of 6 seeds")
