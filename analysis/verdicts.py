@@ -170,9 +170,9 @@ def compare(results: Path, claim: Claim, c: Comparison) -> dict[str, object]:
     if unfinished := _unfinished(report):
         short.append(f"{unfinished} unfinished run(s) in {claim.preset}")
     verdict, p = judge(c.relation, a, b)
-    for key, r, v in (("a", rows[0], a), ("b", rows[1], b)):  # the table's own mean and SE, printed as it has them
+    for key, r, v, k in (("a", rows[0], a, runs[0]), ("b", rows[1], b, runs[1])):  # the table's own mean and SE
         out |= {f"{key}_row": r["row"], f"{key}_n": len(v), f"{key}_mean": r["mean"], f"{key}_se": r["se"]}  # type: ignore[index]
-        out[f"{key}_runs"] = runs[0 if key == "a" else 1]
+        out[f"{key}_runs"] = k
         if "iqm" in r:  # type: ignore[operator]
             out |= {f"{key}_iqm": r["iqm"], f"{key}_iqm_low": r["iqm_low"], f"{key}_iqm_high": r["iqm_high"]}  # type: ignore[index]
     return out | {"welch_p": p, "verdict": PENDING if short else verdict, "why": "; ".join(short)}
