@@ -138,11 +138,10 @@ def _load(report: Path, readout: str) -> pd.DataFrame | str:
 
 def _finished_runs(report: Path, row: str) -> int | None:
     """The finished runs of ``row`` in the preset's ``steps_to_goal.csv``, or None where it has no such row."""
-    path = report / READOUTS["steps"][0]
-    if not path.is_file():
+    table = _load(report, "steps")
+    if isinstance(table, str):
         return None
-    table = pd.read_csv(path)
-    found = table[table["row"] == row]
+    found = table[table["row"] == row]  # the exact label: row labels hold [ ], which a glob would read as a class
     return int(found["seeds"].iloc[0]) if len(found) == 1 else None
 
 
