@@ -8,6 +8,7 @@ except ``mean_success``/``se_success``, which use the seeds that reached the goa
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Sequence
 
 import numpy as np
@@ -49,9 +50,15 @@ def iqm_ci(strata: Sequence[Sequence[float]], seed: int = BOOTSTRAP_SEED) -> tup
 
 def welch_p(x: Sequence[float], reference: Sequence[float]) -> float:
     """Two-sided p-value of Welch's t-test (``ttest_ind(equal_var=False)``); NaN below 2 values on either side or when
-    both samples are constant."""
+    both samples are constant.
+
+    One constant side is a real case (a row whose every run stopped at the cap): its variance is exactly 0 and the
+    test uses the other side's, so scipy's warning about identical data ("precision loss ... catastrophic
+    cancellation") says nothing about this p-value and is not shown."""
     a, b = np.asarray(x, dtype=float), np.asarray(reference, dtype=float)
     if a.size < 2 or b.size < 2:
         return NAN
-    p = float(stats.ttest_ind(a, b, equal_var=False).pvalue)
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="Precision loss occurred in moment calculation", category=RuntimeWarning)
+        p = float(stats.ttest_ind(a, b, equal_var=False).pvalue)
     return p if not math.isnan(p) else NAN

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import shutil
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -13,7 +14,7 @@ import pytest
 from scipy import stats
 
 from analysis.rows import distinguishing_keys, label_rows, load_runs, pool_rows
-from analysis.stats import iqm_ci
+from analysis.stats import iqm_ci, welch_p
 from analysis.tables import paper_numbers, steps_table, write_tables
 from tests.synthetic_runs import RENYI, RENYI_MI, make_run, make_runs
 from tests.test_analysis import analysis
@@ -80,6 +81,19 @@ def test_welch_p_against_the_reference_row_is_scipys(table: pd.DataFrame, root) 
     p = stats.ttest_ind([600, 700, 500], [1700, 2100], equal_var=False).pvalue
     assert other.loc[("acrobot", "nsrs [planner.horizon=3]")].welch_p == pytest.approx(p, rel=1e-9)
     assert math.isnan(other.loc[("mountaincar", "nsrs")].welch_p)  # no random row in MountainCar
+
+
+def test_welch_p_of_a_row_at_the_cap_is_scipys_and_quiet() -> None:
+    # every run at the cap: a constant side, whose variance is 0; scipy's identical-data warning is not passed on
+    capped, reference = [3000.0] * 6, [233.0, 586.0, 3000.0, 1315.0, 367.0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        p = welch_p(capped, reference)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        expected = stats.ttest_ind(capped, reference, equal_var=False).pvalue
+    assert p == pytest.approx(expected, rel=1e-9) and 0.0 < p < 1.0
+    assert math.isnan(welch_p([3000.0] * 3, [3000.0] * 4))  # both constant: no test
 
 
 def test_paper_numbers_sit_beside_ours_with_their_source(table: pd.DataFrame) -> None:
