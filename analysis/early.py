@@ -16,6 +16,7 @@ per run) into ``--out`` (default ``RUNS_DIR/report``).
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -100,8 +101,7 @@ def write_early(root: Path, out: Path, columns: Sequence[str], until: int, group
     corr = correlations(table, columns)
     out.mkdir(parents=True, exist_ok=True)
     (out / "early.md").write_text(to_markdown(table, corr, columns, until))
-    csv = table.assign(run_dir=[str(Path(d).relative_to(root)) if Path(d).is_relative_to(root) else d
-                                for d in table["run_dir"]])  # fmt: skip
+    csv = table.assign(run_dir=[os.path.relpath(d, root) for d in table["run_dir"]])  # an included run: ../<preset>/…
     csv.to_csv(out / "early.csv", index=False, float_format="%.6g", lineterminator="\n")
     return corr
 

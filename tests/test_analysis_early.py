@@ -71,3 +71,17 @@ def test_bad_input_is_one_line_and_writes_nothing(root: Path, tmp_path: Path, ar
     res = analysis("early", root, "--out", tmp_path / "out", *args)
     assert res.returncode == 1 and res.stderr.startswith(f"error: {key}: ") and len(res.stderr.splitlines()) == 1
     assert "allowed" in res.stderr and not (tmp_path / "out").exists()
+
+
+def test_an_included_run_is_named_relative_to_the_directory(tmp_path: Path) -> None:
+    """A run another preset made (``include`` in ``analysis.yaml``) is listed by its path from the directory, so the
+    committed CSV names no machine's paths."""
+    for seed, steps in ((0, 400), (1, 800), (2, 300)):
+        make_run(tmp_path / "lender", "acrobot", "ours", seed, steps)
+    make_run(tmp_path / "fig", "acrobot", "knn", 0, 700, estimator="knn")
+    (tmp_path / "fig" / "analysis.yaml").write_text("include: ['../lender/acrobot/ours/h3/seed=*']\n")
+    res = analysis("early", tmp_path / "fig", "--columns", "behaviour/directed")
+    assert res.returncode == 0, res.stderr
+    csv = pd.read_csv(tmp_path / "fig" / "report" / "early.csv")
+    assert sorted(csv["run_dir"]) == ["../lender/acrobot/ours/h3/seed=0", "../lender/acrobot/ours/h3/seed=1",
+                                      "../lender/acrobot/ours/h3/seed=2", "acrobot/knn/h3/seed=0"]  # fmt: skip
