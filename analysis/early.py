@@ -9,6 +9,9 @@ column: Spearman's rank correlation between those means and steps-to-goal over t
 more of it early reached the goal sooner. It is a correlation over seeds, not a cause: the instrument that says which
 behaviour to change one thing at a time for (issue 11's "instrument it first").
 
+A column named with ``--columns`` that no run logs is refused in one line (a typo would otherwise read as a column
+never logged); of the default columns, those no run logs are left out (baselines log no model probe).
+
 Writes ``early.md`` (per row and column: ρ, p, the runs it is over; then every run's means) and ``early.csv`` (one line
 per run) into ``--out`` (default ``RUNS_DIR/report``).
 """
@@ -41,24 +44,29 @@ def early_means(run_dir: str | Path, columns: Sequence[str], until: int) -> dict
 
 
 def early_table(root: str | Path, columns: Sequence[str], until: int, group_by: Sequence[str] = (),
-                pools: Sequence[str] = ()) -> pd.DataFrame:  # fmt: skip
+                pools: Sequence[str] = (), strict: bool = True) -> pd.DataFrame:  # fmt: skip
     """One line per finished run below ``root``: env, row, seed, steps (censored at the last step), censored,
-    ``whole_run`` (the run ended before ``until``) and the early mean of each column."""
+    ``whole_run`` (the run ended before ``until``) and the early mean of each column that some run logs. A column no
+    run logs is refused (``strict``, a column asked for by name) or left out (the default columns)."""
     runs = load_runs(root)
     if runs.empty:
         raise ValueError(f"{root}: no finished run (a directory holding summary.json) below it")
     runs = pool_rows(label_rows(runs, group_by), pools)
+    header: set[str] = set()
+    for d in set(runs["run_dir"]):
+        header |= set(pd.read_csv(Path(d) / "metrics.csv", nrows=0).columns)
+    unknown = [c for c in columns if c not in header]
+    if (strict and unknown) or len(unknown) == len(columns):
+        examples = ", ".join(sorted(header - {"step"})[:6])
+        raise ValueError(f"--columns {unknown[0]}: no run below {root} logs it; allowed: a column of the runs' "
+                         f"metrics.csv ({examples}, …)")  # fmt: skip
+    columns = [c for c in columns if c in header]
     lines = []
     for r in runs.itertuples(index=False):
         means = early_means(r.run_dir, columns, until)
         lines.append({"env": r.env, "row": r.row, "seed": int(r.seed), "steps": float(r.steps), "censored": bool(r.censored),
                       "whole_run": means.pop("last_step") < until, **means, "run_dir": r.run_dir})  # fmt: skip
-    table = pd.DataFrame(lines).sort_values(["env", "row", "seed"], kind="stable", ignore_index=True)
-    logged = [c for c in columns if table[c].notna().any()]
-    if not logged:
-        raise ValueError(f"--columns {','.join(columns)}: no run below {root} logs any of them before env step {until}; "
-                         "allowed: columns of the runs' metrics.csv, e.g. " + ",".join(DEFAULT_COLUMNS))  # fmt: skip
-    return table
+    return pd.DataFrame(lines).sort_values(["env", "row", "seed"], kind="stable", ignore_index=True)
 
 
 def correlations(table: pd.DataFrame, columns: Sequence[str]) -> pd.DataFrame:
@@ -95,9 +103,10 @@ def to_markdown(table: pd.DataFrame, corr: pd.DataFrame, columns: Sequence[str],
 
 
 def write_early(root: Path, out: Path, columns: Sequence[str], until: int, group_by: Sequence[str] = (),
-                pools: Sequence[str] = ()) -> pd.DataFrame:  # fmt: skip
+                pools: Sequence[str] = (), strict: bool = True) -> pd.DataFrame:  # fmt: skip
     """``early.{md,csv}`` into ``out``; returns the correlations. Nothing is written when the input is refused."""
-    table = early_table(root, columns, until, group_by, pools)
+    table = early_table(root, columns, until, group_by, pools, strict)
+    columns = [c for c in columns if c in table]
     corr = correlations(table, columns)
     out.mkdir(parents=True, exist_ok=True)
     (out / "early.md").write_text(to_markdown(table, corr, columns, until))
@@ -119,7 +128,8 @@ def main() -> None:
         columns = [c for c in o.args.columns.split(",") if c]
         if not columns:
             raise ValueError(f"--columns {o.args.columns!r}: allowed: comma-separated metrics.csv columns")
-        corr = write_early(o.root, o.out, columns, int(until), o.group_by, o.pools)
+        strict = o.args.columns != ",".join(DEFAULT_COLUMNS)  # the defaults: those some run logs
+        corr = write_early(o.root, o.out, columns, int(until), o.group_by, o.pools, strict)
         return f"{len(corr)} correlation(s) written to {o.out}/early.{{md,csv}}"
 
     run(p, command)

@@ -65,8 +65,17 @@ def test_the_command_writes_the_tables_and_rewrites_the_same_bytes(root: Path, t
         assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes()
 
 
-@pytest.mark.parametrize(("args", "key"), [(["--columns", "no/such_column"], "--columns no/such_column"),
-                                           (["--until", "ten"], "--until ten"), (["--until", "0"], "--until 0")])  # fmt: skip
+def test_default_columns_no_run_logs_are_left_out(root: Path, tmp_path: Path) -> None:
+    res = analysis("early", root, "--out", tmp_path)  # the synthetic runs log no probe/spearman
+    assert res.returncode == 0, res.stderr
+    header = pd.read_csv(tmp_path / "early.csv", nrows=0).columns
+    assert "behaviour/directed" in header and "probe/spearman" not in header
+
+
+@pytest.mark.parametrize(("args", "key"), [
+    (["--columns", "no/such_column"], "--columns no/such_column"),
+    (["--columns", "behaviour/directed,behaviour/direct"], "--columns behaviour/direct"),  # a typo beside a real one
+    (["--until", "ten"], "--until ten"), (["--until", "0"], "--until 0")])  # fmt: skip
 def test_bad_input_is_one_line_and_writes_nothing(root: Path, tmp_path: Path, args: list[str], key: str) -> None:
     res = analysis("early", root, "--out", tmp_path / "out", *args)
     assert res.returncode == 1 and res.stderr.startswith(f"error: {key}: ") and len(res.stderr.splitlines()) == 1
