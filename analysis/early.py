@@ -28,16 +28,16 @@ from scipy.stats import spearmanr
 
 from analysis.claims import fmt
 from analysis.cli import Options, parser, run
+from analysis.collect import load_metrics
 from analysis.rows import label_rows, load_runs, pool_rows
 
 DEFAULT_COLUMNS = ("behaviour/directed", "behaviour/repeat", "probe/spearman", "charts/coverage")
 DEFAULT_UNTIL = 200
 
 
-def early_means(run_dir: str | Path, columns: Sequence[str], until: int) -> dict[str, float]:
-    """Mean of each column over ``metrics.csv``'s rows with ``step`` ≤ ``until`` (NaN where none has a value), and
-    ``last_step``, the run's last logged step."""
-    metrics = pd.read_csv(Path(run_dir) / "metrics.csv")
+def early_means(metrics: pd.DataFrame, columns: Sequence[str], until: int) -> dict[str, float]:
+    """Mean of each column over one run's ``metrics.csv`` rows with ``step`` ≤ ``until`` (NaN where none has a value),
+    and ``last_step``, the run's last logged step."""
     window = metrics[metrics["step"] <= until]
     out = {c: float(window[c].mean()) if c in window and window[c].notna().any() else math.nan for c in columns}
     return out | {"last_step": int(metrics["step"].max()) if len(metrics) else 0}
@@ -52,9 +52,9 @@ def early_table(root: str | Path, columns: Sequence[str], until: int, group_by: 
     if runs.empty:
         raise ValueError(f"{root}: no finished run (a directory holding summary.json) below it")
     runs = pool_rows(label_rows(runs, group_by), pools)
-    header: set[str] = set()
-    for d in set(runs["run_dir"]):
-        header |= set(pd.read_csv(Path(d) / "metrics.csv", nrows=0).columns)
+    metrics = load_metrics(root)  # every run's rows, each file read once; a column one run lacks is NaN there
+    per_run = dict(tuple(metrics.groupby("run_dir", sort=False)))
+    header = set(metrics.columns) - {"method", "seed", "run_dir"}
     unknown = [c for c in columns if c not in header]
     if (strict and unknown) or len(unknown) == len(columns):
         examples = ", ".join(sorted(header - {"step"})[:6])
@@ -63,7 +63,7 @@ def early_table(root: str | Path, columns: Sequence[str], until: int, group_by: 
     columns = [c for c in columns if c in header]
     lines = []
     for r in runs.itertuples(index=False):
-        means = early_means(r.run_dir, columns, until)
+        means = early_means(per_run[r.run_dir], columns, until)
         lines.append({"env": r.env, "row": r.row, "seed": int(r.seed), "steps": float(r.steps), "censored": bool(r.censored),
                       "whole_run": means.pop("last_step") < until, **means, "run_dir": r.run_dir})  # fmt: skip
     return pd.DataFrame(lines).sort_values(["env", "row", "seed"], kind="stable", ignore_index=True)
@@ -118,18 +118,18 @@ def write_early(root: Path, out: Path, columns: Sequence[str], until: int, group
 def main() -> None:
     p = parser(__doc__.splitlines()[0])
     p.add_argument("--until", default=str(DEFAULT_UNTIL), help=f"the window's last env step (default {DEFAULT_UNTIL})")
-    p.add_argument("--columns", default=",".join(DEFAULT_COLUMNS),
+    p.add_argument("--columns", default=None,
                    help=f"comma-separated metrics.csv columns (default {','.join(DEFAULT_COLUMNS)})")  # fmt: skip
 
     def command(o: Options) -> str:
         until = o.args.until
         if not until.isdigit() or int(until) < 1:
             raise ValueError(f"--until {until}: allowed: a positive integer env step")
-        columns = [c for c in o.args.columns.split(",") if c]
+        named = o.args.columns is not None  # a named column must be logged; of the defaults, those some run logs
+        columns = [c for c in o.args.columns.split(",") if c] if named else list(DEFAULT_COLUMNS)
         if not columns:
             raise ValueError(f"--columns {o.args.columns!r}: allowed: comma-separated metrics.csv columns")
-        strict = o.args.columns != ",".join(DEFAULT_COLUMNS)  # the defaults: those some run logs
-        corr = write_early(o.root, o.out, columns, int(until), o.group_by, o.pools, strict)
+        corr = write_early(o.root, o.out, columns, int(until), o.group_by, o.pools, strict=named)
         return f"{len(corr)} correlation(s) written to {o.out}/early.{{md,csv}}"
 
     run(p, command)

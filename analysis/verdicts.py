@@ -63,8 +63,8 @@ class Claim:
     comparisons: tuple[Comparison, ...]
 
 
-# Table 1's row of the current default agent (held actions on blurred frames since ccdcc1e) and of the default before
-# it (ours-conv-..., and the oracle-model planner's `oracle` row of that default), which stays in the table beside it
+# The rows of the current default agent (held actions on blurred frames since ccdcc1e) and of the default before it
+# (ours-conv-..., with the oracle-model planner's `oracle` row of that default in Table 1), which stay in Tables 1 and 2
 OURS = "ours-conv_blur-gaussian_potential-kde-backward_off-mpc"
 PREVIOUS_OURS = "ours-conv-gaussian_potential-kde-backward_off-mpc"
 CLAIMS = (
