@@ -11,7 +11,8 @@ Per run, DEST may hold: nothing (the run is copied); the same finished run (the 
 or an unfinished copy of the same run (the same ``.hydra/config.yaml``, no ``summary.json``: a stopped run committed
 earlier, replaced by its finished files). Anything else, a different run at the same path, is refused in one line
 before anything is written, as are a SRC that is missing or holds no run and directories that contain each other.
-The sweep's ``multirun.yaml`` is copied when DEST has none.
+Sweep-level files (Hydra's ``multirun.yaml``) are not copied: a preset is often several launches, each of which
+rewrites it, while every run's ``.hydra/`` holds its own config and overrides.
 
 ``--unfinished`` also copies the unfinished runs that no live process holds (a stopped run, so that the tables list
 it as incomplete instead of leaving its seed out), without their checkpoints; they resume only where their
@@ -31,7 +32,6 @@ from pathlib import Path
 from curiosity.runtime.checkpoint import lock_holder
 
 KEPT = (".hydra", "metrics.csv", "summary.json", "train.log", "tb")
-SWEEP_FILES = ("multirun.yaml",)
 SAME_RUN = ("summary.json", "metrics.csv")  # equal bytes: the run DEST holds is this one
 
 
@@ -49,7 +49,6 @@ class Plan:
     unfinished: list[Path]  # unfinished runs no live process holds (copied with --unfinished)
     running: list[Path]  # unfinished runs a live process holds (never copied)
     ahead: list[Path]  # unfinished runs DEST holds finished (never copied)
-    sweep_files: list[str]  # sweep-level files DEST lacks
 
 
 def run_dirs(root: Path) -> list[Path]:
@@ -80,7 +79,7 @@ def plan(src: Path, dest: Path) -> Plan:
     if not runs:
         raise LandError(f"SRC {src}: holds no run (no directory with .hydra/config.yaml below it); allowed: a results "
                         "directory where a sweep ran")  # fmt: skip
-    out = Plan([], [], [], [], [], [], [n for n in SWEEP_FILES if (src / n).is_file() and not (dest / n).exists()])
+    out = Plan([], [], [], [], [], [])
     for rel in runs:
         a, b = src / rel, dest / rel
         if not (a / "summary.json").is_file():
@@ -134,8 +133,6 @@ def land(src: Path, dest: Path, unfinished: bool = False, dry_run: bool = False)
         return p
     for rel in p.copy + p.complete + (p.unfinished if unfinished else []):
         copy_run(src / rel, dest / rel)
-    for name in p.sweep_files:
-        shutil.copy2(src / name, dest / name)
     return p
 
 
