@@ -6,6 +6,7 @@ a command leaves the files byte for byte as they were; a PNG is at most ``PNG_MA
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -61,7 +62,9 @@ def save(fig: Figure, out: Path, name: str) -> list[Path]:
     """Write ``out/name.png`` and ``out/name.pdf`` (byte-stable) and close the figure; returns the two paths."""
     out.mkdir(parents=True, exist_ok=True)
     png, pdf = out / f"{name}.png", out / f"{name}.pdf"
-    fig.tight_layout()
+    with warnings.catch_warnings():  # a panel grid too wide to fit is left as laid out; bbox_inches="tight" crops it
+        warnings.filterwarnings("ignore", message="Tight layout not applied", category=UserWarning)
+        fig.tight_layout()
     dpi = float(plt.rcParams["savefig.dpi"])
     for _ in range(4):  # the tight box scales almost, not exactly, with the dpi: a few re-saves converge
         fig.savefig(png, metadata=PNG_METADATA, bbox_inches="tight", dpi=dpi)

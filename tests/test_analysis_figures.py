@@ -80,3 +80,26 @@ def test_a_wide_figure_is_saved_at_most_png_max_width_pixels_wide(tmp_path) -> N
     png, _ = save(fig, tmp_path, "narrow")
     with Image.open(png) as image:
         assert image.width < PNG_MAX_WIDTH and image.info["dpi"][0] == pytest.approx(120, abs=1)
+
+
+def test_a_grid_too_tight_to_lay_out_is_saved_without_a_warning(tmp_path) -> None:
+    """matplotlib's "Tight layout not applied" (panels whose labels cannot fit) is not printed by every report: the
+    figure is saved as laid out, cropped to its contents; any other warning still shows."""
+    import warnings
+
+    import matplotlib.pyplot as plt
+
+    from analysis.plotting import save
+
+    fig, axes = plt.subplots(1, 8, figsize=(3, 2))
+    for ax in axes:
+        ax.set_ylabel("a long label " * 6)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        fig.tight_layout()  # the condition itself: matplotlib warns here
+        assert any("Tight layout not applied" in str(w.message) for w in caught)
+        caught.clear()
+        png, _ = save(fig, tmp_path, "tight")
+    assert not [str(w.message) for w in caught]
+    with Image.open(png) as image:
+        assert image.width > 0
