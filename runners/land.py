@@ -111,15 +111,20 @@ def copy_run(src_run: Path, dest_run: Path) -> None:
     directory and a rename, so that an interrupted copy leaves DEST's earlier files in place."""
     dest_run.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{dest_run.name}.", suffix=".landing", dir=dest_run.parent))
-    for name in KEPT:
-        p = src_run / name
-        if p.is_dir():
-            shutil.copytree(p, tmp / name)
-        elif p.is_file():
-            shutil.copy2(p, tmp / name)
+    try:
+        for name in KEPT:
+            p = src_run / name
+            if p.is_dir():
+                shutil.copytree(p, tmp / name)
+            elif p.is_file():
+                shutil.copy2(p, tmp / name)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)  # a half copy would read as a run of its own
+        raise
     old = None
     if dest_run.exists():
-        old = dest_run.with_name(f".{dest_run.name}.replaced")
+        old = Path(tempfile.mkdtemp(prefix=f".{dest_run.name}.", suffix=".replaced", dir=dest_run.parent))
+        old.rmdir()
         dest_run.rename(old)
     tmp.rename(dest_run)
     if old is not None:

@@ -154,3 +154,22 @@ def test_dry_run_writes_nothing_and_the_command_prints_what_it_did(
     main([str(src), str(dest)])
     assert capsys.readouterr().out.startswith("landed 1 finished run(s); 0 already there;")
     assert (dest / "mc/rnd/seed=100/summary.json").is_file()
+
+
+def test_a_copy_that_fails_leaves_no_half_run(src: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A copy that fails half-way (a full disk) leaves DEST as it was: no half-copied directory that the analysis
+    would read as a run."""
+    import runners.land as land_module
+
+    dest = tmp_path / "dest"
+    make_run(dest, "mc/rnd/seed=100", finished=False, steps=2)
+    before = snapshot(dest)
+
+    def full_disk(*args: object, **kwargs: object) -> None:
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(land_module.shutil, "copy2", full_disk)
+    with pytest.raises(OSError):
+        land(src, dest)
+    assert snapshot(dest) == before
+    assert sorted(p.name for p in (dest / "mc/rnd").iterdir()) == ["seed=100"]
