@@ -15,7 +15,8 @@ Sweep-level files (Hydra's ``multirun.yaml``) are not copied: a preset is often 
 rewrites it, while every run's ``.hydra/`` holds its own config and overrides.
 
 ``--unfinished`` also copies the unfinished runs that no live process holds (a stopped run, so that the tables list
-it as incomplete instead of leaving its seed out), without their checkpoints; they resume only where their
+it as incomplete instead of leaving its seed out), without their checkpoints, and never over a copy in DEST that is
+further along (finished, or stopped at a later step: SRC restarted it on a new machine); they resume only where their
 checkpoint is, in SRC. ``--dry-run`` says what would be done and writes nothing.
 """
 
@@ -48,12 +49,21 @@ class Plan:
     same: list[Path]  # finished runs DEST already holds
     unfinished: list[Path]  # unfinished runs no live process holds (copied with --unfinished)
     running: list[Path]  # unfinished runs a live process holds (never copied)
-    ahead: list[Path]  # unfinished runs DEST holds finished (never copied)
+    ahead: list[Path]  # unfinished runs DEST holds finished or further along (never copied)
 
 
 def run_dirs(root: Path) -> list[Path]:
     """Every run directory below ``root`` (one holding ``.hydra/config.yaml``), relative to it, sorted."""
     return sorted(p.parent.parent.relative_to(root) for p in root.rglob(".hydra/config.yaml"))
+
+
+def last_step(run: Path) -> int:
+    """The last env step a run's ``metrics.csv`` logged (-1 without one)."""
+    try:
+        lines = (run / "metrics.csv").read_text().splitlines()
+        return int(float(lines[-1].split(",")[0])) if len(lines) > 1 else -1
+    except (OSError, ValueError):
+        return -1
 
 
 def _same_files(a: Path, b: Path, names: tuple[str, ...]) -> bool:
@@ -86,8 +96,8 @@ def plan(src: Path, dest: Path) -> Plan:
             if b.exists() and any(b.iterdir()) and not _same_files(a, b, (".hydra/config.yaml",)):
                 raise LandError(f"DEST {b}: holds another run than SRC's unfinished {a} (.hydra/config.yaml differs); "
                                 "allowed: the same run, or no run at that path")  # fmt: skip
-            if (b / "summary.json").is_file():
-                out.ahead.append(rel)  # DEST holds it finished (made elsewhere): never replaced by a part of it
+            if (b / "summary.json").is_file() or last_step(b) > last_step(a):
+                out.ahead.append(rel)  # DEST holds more of it (finished, or a longer stopped part): never replaced
             else:
                 (out.running if lock_holder(a) is not None else out.unfinished).append(rel)
             continue
@@ -153,7 +163,7 @@ def report(p: Plan, unfinished: bool, dry_run: bool) -> str:
     if left:
         head += f"; {len(left)} unfinished left in SRC ({len(p.running)} held by a live process)"
     if p.ahead:
-        head += f"; {len(p.ahead)} unfinished in SRC that DEST holds finished"
+        head += f"; {len(p.ahead)} unfinished in SRC that DEST holds further along"
     return "\n".join([head + (":" if lines else ""), *lines])
 
 

@@ -87,13 +87,17 @@ def test_a_run_held_by_a_live_process_is_never_copied(src: Path, tmp_path: Path)
     assert not (tmp_path / "dest/mc/rnd/seed=101").exists()
 
 
-def test_dest_finished_where_src_is_unfinished_is_kept(src: Path, tmp_path: Path) -> None:
+@pytest.mark.parametrize("finished", [True, False])
+def test_dest_further_along_than_src_is_kept(src: Path, tmp_path: Path, finished: bool) -> None:
+    """DEST holds the run finished, or stopped later than SRC's copy (SRC restarted it on a new machine)."""
     dest = tmp_path / "dest"
-    make_run(dest, "mc/rnd/seed=101", config="seed: 101\n", steps=9)
+    make_run(dest, "mc/rnd/seed=101", config="seed: 101\n", steps=9, finished=finished)
     before = snapshot(dest)
     p = land(src, dest, unfinished=True)
-    assert p.ahead == [Path("mc/rnd/seed=101")]
+    assert p.ahead == [Path("mc/rnd/seed=101")] and p.unfinished == []
     assert {k: v for k, v in snapshot(dest).items() if "seed=101" in k} == before
+    make_run(tmp_path / "short", "mc/rnd/seed=101", config="seed: 101\n", steps=3, finished=False)
+    assert land(src, tmp_path / "short", unfinished=True).unfinished == [Path("mc/rnd/seed=101")]  # SRC further
 
 
 @pytest.mark.parametrize(
