@@ -21,6 +21,7 @@ import pandas as pd
 from omegaconf import OmegaConf
 
 from analysis.collect import run_dirs
+from curiosity.runtime.machine import machine_label
 from curiosity.config.compose import saved_config
 
 # Keys that change neither the agent nor the environment, and keys derived from others (the action count follows
@@ -79,8 +80,9 @@ def code_commit(summary: dict) -> str:
 def load_runs(root: str | Path) -> pd.DataFrame:
     """One row per finished run below ``root``: env, method, seed, steps-to-goal, its value with a censored run at its
     last step (``steps``), ``censored``, ``cap``, the code commit that made it (``code``: ``git_commit``'s first 7
-    characters, ``+dirty`` where the tree had uncommitted changes; empty where the summary recorded none), the run's
-    flat config under ``config`` and ``run_dir``."""
+    characters, ``+dirty`` where the tree had uncommitted changes; empty where the summary recorded none), the machine
+    that made it (``machine``: CPU and vector capability; empty where the summary recorded none), the run's flat config
+    under ``config`` and ``run_dir``."""
     rows = []
     for d in run_dirs(root):
         summary = json.loads((d / "summary.json").read_text())
@@ -93,7 +95,8 @@ def load_runs(root: str | Path) -> pd.DataFrame:
             "seed": int(summary["seed"]),
             "reached": reached, "steps": float(summary["steps_to_goal"]) if reached else float(last),
             "censored": not reached, "cap": cap, "wall_seconds": float(summary.get("wall_seconds", float("nan"))),
-            "code": code_commit(summary), "config": cfg, "run_dir": str(d),
+            "code": code_commit(summary), "machine": machine_label(summary.get("machine")), "config": cfg,
+            "run_dir": str(d),
         })  # fmt: skip
     return pd.DataFrame(rows)
 

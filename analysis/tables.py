@@ -142,6 +142,19 @@ def code_line(runs: pd.DataFrame) -> str:
     return "\n".join([text + " Rows pooling runs of more than one commit:", "", *pooled])
 
 
+def machine_line(runs: pd.DataFrame) -> str:
+    """Which machines (CPU and vector capability, ``summary.json``'s ``machine``) made the finished runs, with counts:
+    the same config and seed repeat exactly only on the same machine, so a seed-by-seed comparison of two rows holds
+    only where one machine made both. ``""`` where no run recorded its machine (runs made before the field existed)."""
+    if runs.empty or "machine" not in runs or not runs["machine"].astype(bool).any():
+        return ""
+    counts = runs.drop_duplicates("run_dir")["machine"].replace("", "not recorded").value_counts().sort_index()
+    if len(counts) == 1:
+        return f"Machine: every run was made on `{counts.index[0]}` (`summary.json`'s `machine`)."
+    listed = ", ".join(f"`{m}` ({n} run{'s' if n > 1 else ''})" for m, n in counts.items())
+    return f"Machines (`summary.json`'s `machine`; a seed repeats exactly only on the same one): {listed}."
+
+
 def to_markdown(table: pd.DataFrame, incomplete: pd.DataFrame, reference: str, compute: str = "",
                 code: str = "") -> str:  # fmt: skip
     """The table, its note, the compute the runs took, the code that made them and the runs not finished, as one
@@ -191,7 +204,8 @@ def write_tables(root: Path, out: Path, reference: str = DEFAULT_REFERENCE, grou
     rows = pool_rows(label_rows(runs, group_by), pools) if not runs.empty else runs
     table = steps_table(rows, reference, paper_numbers()) if not runs.empty else pd.DataFrame(columns=["env", "row"])
     out.mkdir(parents=True, exist_ok=True)
-    (out / "steps_to_goal.md").write_text(to_markdown(table, incomplete, reference, compute_line(runs), code_line(rows)))
+    made_by = "\n\n".join(filter(None, [code_line(rows), machine_line(runs)]))  # the code, then the machines
+    (out / "steps_to_goal.md").write_text(to_markdown(table, incomplete, reference, compute_line(runs), made_by))
     (out / "steps_to_goal.tex").write_text(to_latex(table))
     table.to_csv(out / "steps_to_goal.csv", index=False, float_format="%.6g", lineterminator="\n")
     cols = ["env", "method", "seed", "status", "detail", "run_dir"]

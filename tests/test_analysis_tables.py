@@ -230,3 +230,28 @@ def test_the_report_names_the_code_commits_and_each_row_that_pools_several(tmp_p
     assert line.endswith("Rows pooling runs of more than one commit:")
     pooled = [x for x in text.split(line)[1].split("Not finished")[0].splitlines() if x.startswith("- ")]
     assert len(pooled) == 1 and "random" in pooled[0] and pooled[0].endswith("`aaaaaaa` (1), `bbbbbbb+dirty` (1)")
+
+
+def test_the_report_names_the_machines_once_runs_record_them(tmp_path: Path) -> None:
+    """Runs made before summaries recorded their machine give no line (the committed reports stay as they are); one
+    machine, one line naming it; two, each with its run count and the runs that recorded none."""
+    import json
+
+    root = make_runs(tmp_path / "runs")
+    write_tables(root, tmp_path / "none")
+    assert "Machine" not in (tmp_path / "none" / "steps_to_goal.md").read_text()
+    summaries = sorted(root.rglob("summary.json"))
+    intel = {"cpu": "Intel(R) Xeon(R) Processor", "cpu_capability": "AVX512", "torch": "2.13.0+cpu"}
+    for s in summaries:
+        s.write_text(json.dumps({**json.loads(s.read_text()), "machine": intel}))
+    write_tables(root, tmp_path / "one")
+    md = (tmp_path / "one" / "steps_to_goal.md").read_text()
+    assert "Machine: every run was made on `Intel(R) Xeon(R) Processor (AVX512)`" in md
+    amd = {"cpu": "AMD EPYC 7B13", "cpu_capability": "AVX2"}
+    summaries[0].write_text(json.dumps({**json.loads(summaries[0].read_text()), "machine": amd}))
+    summaries[1].write_text(json.dumps({k: v for k, v in json.loads(summaries[1].read_text()).items() if k != "machine"}))
+    write_tables(root, tmp_path / "three")
+    line = next(x for x in (tmp_path / "three" / "steps_to_goal.md").read_text().splitlines() if x.startswith("Machines"))
+    n = len(summaries)
+    assert "`AMD EPYC 7B13 (AVX2)` (1 run)" in line and f"`Intel(R) Xeon(R) Processor (AVX512)` ({n - 2} runs)" in line
+    assert "`not recorded` (1 run)" in line

@@ -34,6 +34,7 @@ from curiosity.runtime.checkpoint import (
     set_rng_states,
 )
 from curiosity.runtime.logger import RunLogger
+from curiosity.runtime.machine import machine
 from curiosity.runtime.seeding import seed_everything
 from curiosity.runtime.summary import RunSummary, git_commit
 
@@ -322,4 +323,5 @@ class _Run:
             steps_per_second=self.step / max(wall, 1e-9), git_commit=commit, git_dirty=dirty,
             planner_sampled_candidates=sampled_candidates(self.cfg),
             behaviour=self.behaviour.summary(), agent=self.agent.summary(), episode_resets=self.resets, goals=self.goals,
+            machine=machine(),
         )  # fmt: skip

@@ -35,7 +35,8 @@ class RunSummary:
     ``agent`` are absent from runs made before they existed. ``episode_resets`` counts the env resets: terminations that
     were not the goal (none on Acrobot and MountainCar, whose only termination is the goal) and, when the run goes on
     past the goal (``budget.stop_at_goal=false``), the goals. ``goals`` counts the times the goal was reached (absent
-    from runs made before it existed); ``steps_to_goal`` is always the first.
+    from runs made before it existed); ``steps_to_goal`` is always the first. ``machine`` is the CPU and torch build
+    that made the run (:mod:`curiosity.runtime.machine`): the same config and seed repeat exactly only on the same one.
     """
 
     method: str
@@ -56,6 +57,7 @@ class RunSummary:
     agent: dict[str, Any] = field(default_factory=dict)  # the agent's own run totals (Agent.summary())
     episode_resets: int = 0  # env resets: non-goal terminations, and goals when the run goes on past them
     goals: int | None = None  # times the goal was reached (None: a run made before the field existed)
+    machine: dict[str, Any] | None = None  # curiosity.runtime.machine.machine() (None: a run made before it existed)
 
     def write(self, run_dir: str | Path) -> Path:
         """Write ``summary.json`` atomically (temporary file + rename)."""

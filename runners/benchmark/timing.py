@@ -3,29 +3,22 @@
 from __future__ import annotations
 
 import os
-import platform
 import statistics
 import time
 from collections.abc import Callable
 from typing import Any
 
-import torch
+
+from curiosity.runtime.machine import machine as run_machine
 
 
 def machine() -> dict[str, str | int]:
-    """CPU model, cores, Python and torch versions, torch threads and platform of this machine."""
-    cpu = platform.processor() or "unknown"
-    try:
-        with open("/proc/cpuinfo") as f:
-            cpu = next(line.split(":", 1)[1].strip() for line in f if line.startswith("model name"))
-    except (OSError, StopIteration):
-        pass
+    """What a run's ``summary.json`` records of this machine (:func:`curiosity.runtime.machine.machine`: CPU model and
+    vector capability, torch and Python versions, torch threads, platform), its cores and the code's commit."""
     from curiosity.runtime.summary import git_commit
 
     commit, dirty = git_commit()
-    return {"cpu": cpu, "cores": os.cpu_count() or 0, "python": platform.python_version(), "torch": torch.__version__,
-            "torch_threads": torch.get_num_threads(), "platform": platform.platform(),
-            "commit": f"{commit}{'-dirty' if dirty else ''}"}  # fmt: skip
+    return {**run_machine(), "cores": os.cpu_count() or 0, "commit": f"{commit}{'-dirty' if dirty else ''}"}
 
 
 def timed(fn: Callable[[], object], repeats: int, warmup: int = 2) -> float:
