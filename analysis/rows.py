@@ -21,8 +21,8 @@ import pandas as pd
 from omegaconf import OmegaConf
 
 from analysis.collect import run_dirs
-from curiosity.runtime.machine import machine_label
 from curiosity.config.compose import saved_config
+from curiosity.runtime.machine import machine_label
 
 # Keys that change neither the agent nor the environment, and keys derived from others (the action count follows
 # env.id and env.distractor, which name the row): left out of a row's identity.

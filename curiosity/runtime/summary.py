@@ -36,7 +36,8 @@ class RunSummary:
     were not the goal (none on Acrobot and MountainCar, whose only termination is the goal) and, when the run goes on
     past the goal (``budget.stop_at_goal=false``), the goals. ``goals`` counts the times the goal was reached (absent
     from runs made before it existed); ``steps_to_goal`` is always the first. ``machine`` is the CPU and torch build
-    that made the run (:mod:`curiosity.runtime.machine`): the same config and seed repeat exactly only on the same one.
+    that finished the run (:mod:`curiosity.runtime.machine`; a run resumed on another machine was partly made by that
+    one): the same config and seed repeat exactly only on the same machine.
     """
 
     method: str
