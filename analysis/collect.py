@@ -41,13 +41,14 @@ def all_run_dirs(root: str | Path) -> list[Path]:
     return sorted(found)
 
 
-def _last_step(run_dir: Path) -> int | None:
+def last_step(run_dir: Path) -> int | None:
+    """The last env step a run's ``metrics.csv`` logged; None without one, or before its first row."""
     try:
         with (run_dir / "metrics.csv").open(newline="") as f:
             rows = list(csv.reader(f))
-    except OSError:
+        return int(rows[-1][0]) if len(rows) > 1 else None
+    except (OSError, ValueError):  # no file, or a last row being written
         return None
-    return int(rows[-1][0]) if len(rows) > 1 else None
 
 
 def _live_lock(run_dir: Path) -> int | None:
@@ -62,7 +63,7 @@ def _live_lock(run_dir: Path) -> int | None:
 def run_status(run_dir: str | Path) -> tuple[str, str]:
     """(status, detail) of a run directory: complete, running, failed or stopped, and what it reached."""
     run_dir = Path(run_dir)
-    step = _last_step(run_dir)
+    step = last_step(run_dir)
     at = f"at env step {step}" if step is not None else "before its first metrics row"
     if (run_dir / "summary.json").exists():
         summary = json.loads((run_dir / "summary.json").read_text())

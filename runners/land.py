@@ -30,6 +30,7 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
+from analysis.collect import all_run_dirs, last_step
 from curiosity.runtime.checkpoint import lock_holder
 
 KEPT = (".hydra", "metrics.csv", "summary.json", "train.log", "tb")
@@ -53,17 +54,13 @@ class Plan:
 
 
 def run_dirs(root: Path) -> list[Path]:
-    """Every run directory below ``root`` (one holding ``.hydra/config.yaml``), relative to it, sorted."""
-    return sorted(p.parent.parent.relative_to(root) for p in root.rglob(".hydra/config.yaml"))
+    """Every run directory below ``root`` that holds ``.hydra/config.yaml``, relative to it, sorted."""
+    return [d.relative_to(root) for d in all_run_dirs(root) if (d / ".hydra/config.yaml").is_file()]
 
 
-def last_step(run: Path) -> int:
-    """The last env step a run's ``metrics.csv`` logged (-1 without one)."""
-    try:
-        lines = (run / "metrics.csv").read_text().splitlines()
-        return int(float(lines[-1].split(",")[0])) if len(lines) > 1 else -1
-    except (OSError, ValueError):
-        return -1
+def _steps(run: Path) -> int:
+    step = last_step(run)
+    return -1 if step is None else step
 
 
 def _same_files(a: Path, b: Path, names: tuple[str, ...]) -> bool:
@@ -96,7 +93,7 @@ def plan(src: Path, dest: Path) -> Plan:
             if b.exists() and any(b.iterdir()) and not _same_files(a, b, (".hydra/config.yaml",)):
                 raise LandError(f"DEST {b}: holds another run than SRC's unfinished {a} (.hydra/config.yaml differs); "
                                 "allowed: the same run, or no run at that path")  # fmt: skip
-            if (b / "summary.json").is_file() or last_step(b) > last_step(a):
+            if (b / "summary.json").is_file() or _steps(b) > _steps(a):
                 out.ahead.append(rel)  # DEST holds more of it (finished, or a longer stopped part): never replaced
             else:
                 (out.running if lock_holder(a) is not None else out.unfinished).append(rel)

@@ -8,7 +8,6 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-
 from curiosity.runtime.machine import machine as run_machine
 
 
