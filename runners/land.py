@@ -149,19 +149,21 @@ def land(src: Path, dest: Path, unfinished: bool = False, dry_run: bool = False)
 
 
 def report(p: Plan, unfinished: bool, dry_run: bool) -> str:
+    """One summary line, then one line per run landed (``land:``) and per unfinished run left in SRC (``left:``)."""
     verb = "would land" if dry_run else "landed"
-    lines = [f"  {rel}" for rel in p.copy] + [f"  {rel} (completes its unfinished copy)" for rel in p.complete]
+    lines = [f"  land: {rel}" for rel in p.copy] + [f"  land: {rel} (completes its unfinished copy)" for rel in p.complete]
     if unfinished:
-        lines += [f"  {rel} (unfinished)" for rel in p.unfinished]
+        lines += [f"  land: {rel} (unfinished)" for rel in p.unfinished]
     head = (f"{verb} {len(p.copy) + len(p.complete)} finished run(s)"
             + (f" and {len(p.unfinished)} unfinished" if unfinished else "")
             + f"; {len(p.same)} already there")  # fmt: skip
     left = ([] if unfinished else p.unfinished) + p.running
     if left:
         head += f"; {len(left)} unfinished left in SRC ({len(p.running)} held by a live process)"
+        lines += [f"  left: {rel}" + (" (held by a live process)" if rel in p.running else "") for rel in left]
     if p.ahead:
         head += f"; {len(p.ahead)} unfinished in SRC that DEST holds further along"
-    return "\n".join([head + (":" if lines else ""), *lines])
+    return "\n".join([head, *lines])
 
 
 def main(argv: list[str] | None = None) -> None:

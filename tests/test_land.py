@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from runners.land import KEPT, land, main
+from runners.land import KEPT, land, main, report
 
 
 def make_run(root: Path, rel: str, config: str = "seed: 1\n", finished: bool = True, steps: int = 5) -> Path:
@@ -85,6 +85,11 @@ def test_a_run_held_by_a_live_process_is_never_copied(src: Path, tmp_path: Path)
             other.kill()
     assert p.running == [Path("mc/rnd/seed=101")] and p.unfinished == []
     assert not (tmp_path / "dest/mc/rnd/seed=101").exists()
+    assert report(p, unfinished=True, dry_run=False).splitlines() == [
+        "landed 1 finished run(s) and 0 unfinished; 0 already there; 1 unfinished left in SRC (1 held by a live process)",
+        "  land: mc/rnd/seed=100",
+        "  left: mc/rnd/seed=101 (held by a live process)",
+    ]
 
 
 @pytest.mark.parametrize("finished", [True, False])
@@ -152,8 +157,9 @@ def test_dry_run_writes_nothing_and_the_command_prints_what_it_did(
     main([str(src), str(dest), "--dry-run"])
     assert not dest.exists()
     assert capsys.readouterr().out.splitlines() == [
-        "would land 1 finished run(s); 0 already there; 1 unfinished left in SRC (0 held by a live process):",
-        "  mc/rnd/seed=100",
+        "would land 1 finished run(s); 0 already there; 1 unfinished left in SRC (0 held by a live process)",
+        "  land: mc/rnd/seed=100",
+        "  left: mc/rnd/seed=101",
     ]
     main([str(src), str(dest)])
     assert capsys.readouterr().out.startswith("landed 1 finished run(s); 0 already there;")
