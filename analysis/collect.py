@@ -10,13 +10,14 @@ from __future__ import annotations
 import argparse
 import csv
 import json
-import os
 import sys
 from pathlib import Path
 
 import pandas as pd
 import yaml
 from omegaconf import OmegaConf
+
+from curiosity.runtime.checkpoint import lock_holder
 
 GROUPS = ("env", "encoder", "entropy", "estimator", "backward", "baseline", "planner", "budget")
 # A directory holds a run when it has one of these (a job refused before it started leaves only FAILED.json).
@@ -51,15 +52,6 @@ def last_step(run_dir: Path) -> int | None:
         return None
 
 
-def _live_lock(run_dir: Path) -> int | None:
-    try:
-        pid = int((run_dir / "run.lock").read_text().strip() or 0)
-        os.kill(pid, 0)
-    except (OSError, ValueError):
-        return None
-    return pid or None
-
-
 def run_status(run_dir: str | Path) -> tuple[str, str]:
     """(status, detail) of a run directory: complete, running, failed or stopped, and what it reached."""
     run_dir = Path(run_dir)
@@ -69,7 +61,7 @@ def run_status(run_dir: str | Path) -> tuple[str, str]:
         summary = json.loads((run_dir / "summary.json").read_text())
         goal = summary["steps_to_goal"]
         return "complete", f"goal at step {goal}" if goal is not None else f"goal not reached in {summary['max_steps']}"
-    if (pid := _live_lock(run_dir)) is not None:
+    if (pid := lock_holder(run_dir)) is not None:
         return "running", f"process {pid}, {at}"
     if (run_dir / "FAILED.json").exists():
         error = json.loads((run_dir / "FAILED.json").read_text())["error"]

@@ -19,7 +19,7 @@ import numpy as np
 import pandas as pd
 import yaml
 
-from analysis.collect import existing_roots
+from analysis.collect import existing_roots, last_step
 
 PARTS = {"training": "timing/train_ms", "planning": "timing/plan_ms", "memory refresh": "timing/refresh_ms"}
 
@@ -67,14 +67,10 @@ def _print(run_dir: Path) -> None:
         print(f"{run_dir}\n  no profile: it has no .hydra/config.yaml or no metrics row yet")
         return
     parts = profile(run_dir)
-    done = "" if (run_dir / "summary.json").exists() else f"  (unfinished: up to env step {_last_step(run_dir)})"
+    done = "" if (run_dir / "summary.json").exists() else f"  (unfinished: up to env step {last_step(run_dir)})"
     print(f"{run_dir}{done}")
     for part, seconds in parts.items():
         print(f"  {part:30s} {seconds:8.1f} s  {100 * seconds / max(parts['total'], 1e-9):5.1f} %")
-
-
-def _last_step(run_dir: Path) -> int:
-    return int(pd.read_csv(run_dir / "metrics.csv")["step"].iloc[-1])
 
 
 def main() -> None:

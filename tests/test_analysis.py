@@ -50,6 +50,22 @@ def test_collect_lists_every_run_with_its_status(sweep: Path) -> None:
     assert any(line.startswith("failed") and "+foo=1" in line for line in lines)
 
 
+def test_collect_reads_a_run_whose_lock_a_live_process_holds_as_running(sweep: Path) -> None:
+    """The stopped seed 3 with a lock held by a live process reads as running; with the lock's process gone, as
+    stopped again (a stale lock)."""
+    lock = next(p for p in sweep.rglob("seed=3") if not (p / "summary.json").exists()) / "run.lock"
+    with subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"]) as other:
+        try:
+            lock.write_text(f"{other.pid}\n")
+            res = analysis("collect", sweep)
+        finally:
+            other.kill()
+    assert any(line.startswith("running") and f"process {other.pid}, at env step 1990" in line
+               for line in res.stdout.splitlines())  # fmt: skip
+    assert res.stdout.splitlines()[-1] == "6 run(s): 3 complete, 1 failed, 1 running, 1 stopped"
+    assert analysis("collect", sweep).stdout.splitlines()[-1] == "6 run(s): 3 complete, 1 failed, 2 stopped"
+
+
 @pytest.mark.parametrize("module", ["collect", "steps_table", "profile"])
 def test_no_runs_or_no_directory_is_one_line_and_non_zero(tmp_path: Path, module: str) -> None:
     for root in (tmp_path, tmp_path / "missing"):
