@@ -15,7 +15,7 @@ from torch import nn
 
 from curiosity.nets.encoders import tanh_mlp
 from curiosity.nets.onehot import one_hot
-from curiosity.runtime.restore import restore_run
+from refit_order import frozen_latents
 
 HORIZON = 20
 
@@ -41,20 +41,14 @@ def rollout(net: Chunk, z: torch.Tensor, acts: torch.Tensor) -> torch.Tensor:
 
 def main() -> None:
     torch.set_num_threads(1)
-    run = restore_run(sys.argv[1])
-    model = run.agent.model
-    with model.evaluating():
-        obs = run.agent.replay.all_obs()
-        z_all = torch.cat([model.encode(obs[i : i + 256]) for i in range(0, len(obs), 256)])
-    act = torch.as_tensor(run.agent.replay.all_actions()).long()
-    z_all = (z_all - z_all.mean(0)) / z_all.std(0)
+    z_all, act, n_actions = frozen_latents(sys.argv[1])
     n_total, split = len(z_all), int(0.8 * len(z_all))
     held = (act[1:] == act[:-1]).float().mean()
     print(f"transitions {n_total}, latent RMS {z_all.square().sum(-1).mean().sqrt():.2f}, P(a_t = a_t-1) {held:.2f}")
 
     def fit(k: int, n: int, hidden: int, seed: int) -> Chunk:
         torch.manual_seed(seed)
-        net = Chunk(z_all.shape[1], model.n_actions, k, hidden)
+        net = Chunk(z_all.shape[1], n_actions, k, hidden)
         opt = torch.optim.Adam(net.parameters(), 1e-3)
         g = torch.Generator().manual_seed(seed)
         for _ in range(3000):

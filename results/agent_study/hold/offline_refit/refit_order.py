@@ -39,20 +39,26 @@ def rollout(net: Transition, z: torch.Tensor, z_prev: torch.Tensor, acts: torch.
     return torch.stack(out, 1)
 
 
-def main() -> None:
-    torch.set_num_threads(1)
-    run = restore_run(sys.argv[1])
+def frozen_latents(run_dir: str) -> tuple[torch.Tensor, torch.Tensor, int]:
+    """A run's replay encoded by its final encoder (eval mode), standardised per coordinate: latents (N, d), the
+    actions (N,) and the number of actions."""
+    run = restore_run(run_dir)
     model = run.agent.model
     with model.evaluating():
         obs = run.agent.replay.all_obs()
         z_all = torch.cat([model.encode(obs[i : i + 256]) for i in range(0, len(obs), 256)])
     act = torch.as_tensor(run.agent.replay.all_actions()).long()
-    z_all = (z_all - z_all.mean(0)) / z_all.std(0)
+    return (z_all - z_all.mean(0)) / z_all.std(0), act, model.n_actions
+
+
+def main() -> None:
+    torch.set_num_threads(1)
+    z_all, act, n_actions = frozen_latents(sys.argv[1])
     n_total, split, horizon = len(z_all), int(0.8 * len(z_all)), max(DEPTHS)
 
     def fit(order: int, hidden: int, n: int) -> Transition:
         torch.manual_seed(0)
-        net = Transition(z_all.shape[1], model.n_actions, order, hidden)
+        net = Transition(z_all.shape[1], n_actions, order, hidden)
         opt = torch.optim.Adam(net.parameters(), 1e-3)
         g = torch.Generator().manual_seed(0)
         for _ in range(3000):
