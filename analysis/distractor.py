@@ -44,7 +44,11 @@ def has_distractor(runs: pd.DataFrame) -> bool:
 
 
 def distractor_table(runs: pd.DataFrame) -> pd.DataFrame:
-    """One line per (env, method, distractor) of :func:`analysis.rows.load_runs`' runs; empty without a distractor."""
+    """One line per (env, method, distractor) of :func:`analysis.rows.load_runs`' runs; empty without a distractor.
+
+    Columns: env, method, distractor, n, reached, per_seed (steps-to-goal), mean, se, median, welch_p (against the
+    method without a distractor), tv_rate and tv_rate_se (over the runs that report one), tv_per_seed (those rates in
+    seed order, space-separated; empty for runs without a TV)."""
     if not has_distractor(runs):
         return pd.DataFrame()
     runs = runs.assign(distractor=[_distractor(c) for c in runs["config"]])
@@ -54,14 +58,14 @@ def distractor_table(runs: pd.DataFrame) -> pd.DataFrame:
         for distractor, d in g.groupby("distractor", sort=True):
             d = d.sort_values("seed")
             mean, se = mean_se(d["steps"].tolist())
-            rates = [r for r in map(_tv_rate, d["run_dir"]) if not math.isnan(r)]
+            rates = [r for r in map(_tv_rate, d["run_dir"]) if not math.isnan(r)]  # in seed order
             rate, rate_se = mean_se(rates) if rates else (math.nan, math.nan)
             out.append({
                 "env": env, "method": method, "distractor": distractor, "n": len(d), "reached": int(d["reached"].sum()),
                 "per_seed": per_seed_text(d),
                 "mean": mean, "se": se, "median": float(np.median(d["steps"])),
                 "welch_p": math.nan if distractor == NONE or not clean else welch_p(d["steps"].tolist(), clean),
-                "tv_rate": rate, "tv_rate_se": rate_se,
+                "tv_rate": rate, "tv_rate_se": rate_se, "tv_per_seed": " ".join(f"{r:.6g}" for r in rates),
             })  # fmt: skip
     return pd.DataFrame(out)
 

@@ -1,6 +1,12 @@
 """Does the paper hold? One verdict per claim of the paper (§4), computed from the committed tables only.
 
-``python -m analysis.verdicts RESULTS_DIR`` reads ``<preset>/report/{steps_to_goal,spread,stable_step}.csv`` below
+The paper's results (Tables 1 and 2, Figures 6 and 7, the hybrid of §4.2), and one claim it argues but never tests
+(§2.3, §3.2, §3.3.3: density-based novelty resists a noisy TV that draws a prediction-error bonus; issue 16), whose
+rule was fixed before any run with the TV: prediction error alone presses the TV more often than density alone, the
+hybrid less often than prediction error alone, and the hybrid reaches the goal sooner than prediction error alone with
+the TV (each over seeds 100–107 of ``noisy_tv/report/distractor.csv``).
+
+``python -m analysis.verdicts RESULTS_DIR`` reads ``<preset>/report/{steps_to_goal,spread,stable_step,distractor}.csv`` below
 RESULTS_DIR (what ``python -m analysis.tables results/<preset>`` writes) and writes ``verdicts.md`` and ``verdicts.csv``
 there. Every number it prints is a number of those tables, or a test on their per-seed values.
 
@@ -39,7 +45,15 @@ READOUTS = {
     "steps": ("steps_to_goal.csv", "steps-to-goal", None),
     "spread@200": ("spread.csv", "spread of the next latents at env step 200 (`info/latent_logdet`)", 200),
     "stable": ("stable_step.csv", "env step of a stable intrinsic reward", None),
+    "tv_steps": ("distractor.csv", "steps-to-goal, with or without the noisy TV", None),
+    "tv_presses": ("distractor.csv", "TV-press rate (the agent's own steps that pressed the remote)", None),
 }
+TV = "tv_presses"  # a rate: printed with three decimals
+
+
+def tv_row(method: str, distractor: str) -> str:
+    """The row label of a method with (``noisy_tv``) or without (``none``) the TV in ``distractor.csv``."""
+    return f"{method} (TV: {distractor})"
 
 
 @dataclass(frozen=True)
@@ -88,6 +102,18 @@ CLAIMS = (
            Comparison("ours-conv_blur-gaussian_potential-kde-*", "<", "ours-conv_blur-gaussian_potential-knn-*", "steps", 6))),
     Claim("Hybrid (§4.2)", "the hybrid of prediction error and density beats either alone", "hybrid",
           (Comparison("ours_hybrid", "<", "ours_density", seeds=6), Comparison("ours_hybrid", "<", "ours_pe", seeds=6))),
+    # argued in the paper, never tested there (issue 16); the rule fixed on 2026-12-06, before any run with the TV
+    Claim("Noisy TV (§2.3, §3.2, §3.3.3; argued, not tested)", "a prediction-error bonus is drawn to a noisy TV; "
+          "density-based novelty, alone or in the hybrid, resists it", "noisy_tv",
+          (Comparison(tv_row("ours_pe", "noisy_tv"), ">", tv_row("ours_density", "noisy_tv"), TV, 8),
+           Comparison(tv_row("ours_hybrid", "noisy_tv"), "<", tv_row("ours_pe", "noisy_tv"), TV, 8),
+           Comparison(tv_row("ours_hybrid", "noisy_tv"), "<", tv_row("ours_pe", "noisy_tv"), "tv_steps", 8),
+           # beside the claim: the classic prediction-error and observation-novelty baselines at the remote, and
+           # whether the TV slows each method down (with it against without it)
+           Comparison(tv_row("icm", "noisy_tv"), ">", tv_row("ours_density", "noisy_tv"), TV, 8, counts=False),
+           Comparison(tv_row("rnd", "noisy_tv"), ">", tv_row("ours_density", "noisy_tv"), TV, 8, counts=False),
+           *(Comparison(tv_row(m, "noisy_tv"), ">", tv_row(m, "none"), "tv_steps", 8, counts=False)
+             for m in ("ours_pe", "ours_density", "ours_hybrid", "icm", "rnd")))),
 )  # fmt: skip
 
 
@@ -135,6 +161,10 @@ def _load(report: Path, readout: str) -> pd.DataFrame | str:
     table = pd.read_csv(path)
     if step is not None:
         table = table[table["step"] == step]
+    if name == "distractor.csv":  # one row per (method, distractor); the TV-press readout tests the rates
+        table = table.assign(row=[tv_row(m, d) for m, d in zip(table["method"], table["distractor"], strict=True)])
+        if readout == TV:
+            table = table.assign(per_seed=table["tv_per_seed"].fillna(""), mean=table["tv_rate"], se=table["tv_rate_se"])
     return table
 
 
@@ -193,7 +223,8 @@ def _side(r: pd.Series, key: str) -> str:
         return "–"
     n, runs = int(r[f"{key}_n"]), r.get(f"{key}_runs", math.nan)
     ended = "" if pd.isna(runs) or int(runs) == n else f" of {int(runs)} runs; {int(runs) - n} ended before the step"
-    text = f"`{r[f'{key}_row']}`: {fmt(r[f'{key}_mean'], '.1f')} ± {fmt(r[f'{key}_se'], '.1f')} (n = {n}{ended})"
+    spec = ".3f" if r["readout"] == TV else ".1f"
+    text = f"`{r[f'{key}_row']}`: {fmt(r[f'{key}_mean'], spec)} ± {fmt(r[f'{key}_se'], spec)} (n = {n}{ended})"
     if not pd.isna(r.get(f"{key}_iqm", math.nan)):
         low, high = (fmt(float(r[f"{key}_iqm_{end}"]), ".1f") for end in ("low", "high"))
         text += f", IQM {fmt(float(r[f'{key}_iqm']), '.1f')} [{low}, {high}]"

@@ -112,3 +112,45 @@ def test_a_value_at_a_step_counts_the_finished_runs_and_tests_those_still_going(
     assert "(n = 5 of 6 runs; 1 ended before the step)" in to_markdown(verdicts(tmp_path / "done"))
     waiting = verdicts(_fig6(tmp_path / "running", gaussian_finished=5)).set_index("claim").loc["Figure 6"]
     assert waiting.verdict == PENDING and waiting.why.endswith("gaussian_potential-kde-backward_off-mpc: 5 of 6 seeds")
+
+
+def _noisy_tv(root: Path, hybrid_tv_seeds: int = 8) -> Path:
+    """results/noisy_tv from synthetic runs, seeds 0–7: prediction error alone (``ours_pe``) presses the TV often and
+    is slowed by it; density alone and the hybrid press it about as a random policy does (1/4) and are not."""
+    runs = root / "noisy_tv"
+    for seed in range(8):
+        jitter = 0.01 * (seed % 4)
+        for method, clean, tv, rate in (("ours_pe", FAST, SLOW, 0.6), ("ours_density", FAST, FAST, 0.25),
+                                        ("ours_hybrid", FAST, NOISY, 0.3), ("icm", SLOW, SLOW, 0.5),
+                                        ("rnd", SLOW, SLOW, 0.26)):  # fmt: skip
+            make_run(runs, "acrobot", method, seed, int(clean[seed]))
+            if method != "ours_hybrid" or seed < hybrid_tv_seeds:
+                make_run(runs, "acrobot", method, seed, int(tv[seed]), distractor="noisy_tv", tv_rate=rate + jitter)
+    write_tables(runs, runs / "report")
+    return root
+
+
+def test_the_noisy_tv_claim_reads_the_tv_presses_and_steps_of_the_distractor_table(tmp_path: Path) -> None:
+    table = verdicts(_noisy_tv(tmp_path)).set_index("claim")
+    tv = table.loc[next(c.name for c in CLAIMS if c.preset == "noisy_tv")]
+    counted = tv[tv["counts"]]
+    assert list(counted["readout"]) == ["tv_presses", "tv_presses", "tv_steps"]
+    assert list(counted["verdict"]) == [SUPPORTED, SUPPORTED, SUPPORTED] and set(tv["claim_verdict"]) == {SUPPORTED}
+    pe_density = counted.iloc[0]
+    rates = pd.read_csv(tmp_path / "noisy_tv" / "report" / "distractor.csv").set_index(["method", "distractor"])
+    assert (pe_density.a_row, pe_density.b_row) == ("ours_pe (TV: noisy_tv)", "ours_density (TV: noisy_tv)")
+    assert pe_density.a_mean == rates.loc[("ours_pe", "noisy_tv"), "tv_rate"] and pe_density.a_n == 8
+    assert pe_density.welch_p == pytest.approx(stats.ttest_ind([0.6 + 0.01 * (s % 4) for s in range(8)],
+                                                               [0.25 + 0.01 * (s % 4) for s in range(8)],
+                                                               equal_var=False).pvalue, rel=1e-6)  # fmt: skip
+    beside = tv[~tv["counts"]].set_index("a")
+    assert beside.loc["ours_pe (TV: noisy_tv)", "verdict"] == SUPPORTED  # the TV slows prediction error alone
+    assert beside.loc["ours_density (TV: noisy_tv)", "verdict"] == NOT_SUPPORTED  # and not density alone
+    assert "`ours_pe (TV: noisy_tv)`: 0.615 ± 0.004 (n = 8)" in to_markdown(verdicts(tmp_path))
+
+
+def test_the_noisy_tv_claim_waits_for_every_seed_with_the_tv(tmp_path: Path) -> None:
+    table = verdicts(_noisy_tv(tmp_path, hybrid_tv_seeds=7)).set_index("claim")
+    tv = table.loc[next(c.name for c in CLAIMS if c.preset == "noisy_tv")]
+    assert set(tv["claim_verdict"]) == {PENDING}
+    assert tv[tv["counts"]].iloc[1].why == "ours_hybrid (TV: noisy_tv): 7 of 8 seeds"
