@@ -146,9 +146,9 @@ def machine_line(runs: pd.DataFrame) -> str:
     """Which machines (CPU and vector capability, ``summary.json``'s ``machine``) made the finished runs, with counts:
     the same config and seed repeat exactly only on the same machine, so a seed-by-seed comparison of two rows holds
     only where one machine made both. ``""`` where no run recorded its machine (runs made before the field existed)."""
-    if runs.empty or "machine" not in runs or not runs["machine"].astype(bool).any():
+    if runs.empty or not runs["machine"].astype(bool).any():
         return ""
-    counts = runs.drop_duplicates("run_dir")["machine"].replace("", "not recorded").value_counts().sort_index()
+    counts = runs["machine"].replace("", "not recorded").value_counts().sort_index()
     if len(counts) == 1:
         return f"Machine: every run was made on `{counts.index[0]}` (`summary.json`'s `machine`)."
     listed = ", ".join(f"`{m}` ({n} run{'s' if n > 1 else ''})" for m, n in counts.items())
