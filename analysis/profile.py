@@ -19,7 +19,7 @@ import numpy as np
 import pandas as pd
 import yaml
 
-from analysis.collect import existing_roots, last_step
+from analysis.collect import all_run_dirs, existing_roots, last_step
 
 PARTS = {"training": "timing/train_ms", "planning": "timing/plan_ms", "memory refresh": "timing/refresh_ms"}
 
@@ -59,7 +59,7 @@ def _runs(path: Path) -> list[Path]:
     """``path`` if it is a run directory that can be profiled, else every such run below it."""
     if (path / "metrics.csv").exists():
         return [path]
-    return sorted(p.parent for p in path.rglob("metrics.csv") if (p.parent / ".hydra" / "config.yaml").exists())
+    return [p for p in all_run_dirs(path) if (p / "metrics.csv").exists() and (p / ".hydra" / "config.yaml").exists()]
 
 
 def _print(run_dir: Path) -> None:
