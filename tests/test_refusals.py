@@ -77,6 +77,8 @@ OUT_OF_RANGE = dict([
     _out_of_range("agent.transition_ensemble", "0"), _out_of_range("intrinsic.terms.novelty.refresh_drift", "-0.1"),
     _out_of_range("agent.probe_every", "-1"), _out_of_range("intrinsic.scale", "-1"),
     _out_of_range("intrinsic.terms.rnd.lr", "0", *RND),
+    _out_of_range("intrinsic.terms.novelty.target_dim", "0"), _out_of_range("intrinsic.terms.novelty.target_hidden", "0"),
+    _out_of_range("intrinsic.terms.novelty.target_lr", "0"), _out_of_range("intrinsic.terms.novelty.target_blur", "-1"),
 ])  # fmt: skip
 
 OTHER = {

@@ -47,6 +47,7 @@ class NoveltyInput(Enum):
     state_action = "state_action"
     state = "state"
     state_motion = "state_motion"
+    random_target = "random_target"
 
 
 class PEImagined(Enum):
@@ -304,8 +305,13 @@ class LatentNoveltyTermConfig:
     estimator: Any = "${estimator}"  # the estimator group
     input: NoveltyInput = NoveltyInput.state  # state: the state reached (measured better here) | state_action (the text)
     # | state_motion: the state reached and the latent's one-step motion into it
+    # | random_target: a frozen random conv encoder's codes of the frame reached; imagined: a head's from the latent
     action_scale: float = 1.0  # c, length of the action part of y (state_action), in latent standard deviations
     motion_scale: float = 1.0  # m, weight of the motion part of state_motion, in motion standard deviations
+    target_dim: int = 4  # random_target: size of the random encoder's codes
+    target_hidden: int = 64  # random_target: width of the head's two hidden layers (latent -> code)
+    target_lr: float = 1e-3  # random_target: the head's Adam learning rate
+    target_blur: float = 4.0  # random_target: the random encoder's Gaussian blur of each frame, pixels (0: none)
     standardise: bool = True  # standardise latents per dimension by the memory's statistics at each refresh
     memory_mode: MemoryMode = MemoryMode.exact  # exact (every pair) | reservoir (a uniform sample of memory_size)
     memory_size: int = 100_000

@@ -80,6 +80,10 @@ RULES: list[Rule] = [
     ("planner.hold", lambda v: v >= 1, "an integer >= 1 (1: every env step its own action)"),
     ("agent.transition_ensemble", lambda v: v >= 1, "an integer >= 1 (1: one transition model)"),
     ("intrinsic.terms.novelty.refresh_drift", lambda v: v >= 0, "a number >= 0 (0: refresh on the schedule only)"),
+    ("intrinsic.terms.novelty.target_dim", lambda v: v >= 1, "an integer >= 1"),
+    ("intrinsic.terms.novelty.target_hidden", lambda v: v >= 1, "an integer >= 1"),
+    ("intrinsic.terms.novelty.target_lr", lambda v: v > 0, "a learning rate > 0"),
+    ("intrinsic.terms.novelty.target_blur", lambda v: v >= 0, "a number >= 0 (0: no blur)"),
     ("agent.probe_every", lambda v: v >= 0, "an integer >= 0 (0: no model probe)"),
     ("encoder.hidden", lambda v: all(w >= 1 for w in v), "a list of layer widths >= 1"),
     ("baseline.epsilon", lambda v: 0 <= v <= 1, "an exploration probability in [0, 1]"),
@@ -173,8 +177,12 @@ def _intrinsic_errors(cfg: DictConfig) -> list[str]:
 
 
 def _pairing_errors(cfg: DictConfig) -> list[str]:
-    """The encoder must take the env's observations, and the env must have them."""
+    """The encoder must take the env's observations, and the env must have them (frames for random-target novelty)."""
     obs, env = choice(cfg.env.obs), cfg.env.name
+    novelty_input = OmegaConf.select(cfg, "intrinsic.terms.novelty.input", default=None)
+    if novelty_input is not None and choice(novelty_input) == "random_target" and obs != "pixels":
+        return [f"intrinsic.terms.novelty.input=random_target: encodes frames, and env.obs={obs} has none; allowed: "
+                "env.obs=pixels, or intrinsic.terms.novelty.input=state, state_action or state_motion"]  # fmt: skip
     if obs == "pixels" and not cfg.env.pixels_available:
         return [f"env.obs=pixels: env={env} has no pixel observations; allowed: env.obs=state (with encoder=mlp)"]
     if obs == "pixels" and choice(cfg.env.renderer) == "fast" and cfg.env.get("fast_renderer") is None:

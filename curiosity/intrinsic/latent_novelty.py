@@ -9,6 +9,10 @@ Input (``input``):
     and the latent's one-step motion into it; an edge (s, a, s') is scored by novelty([s', m·(s' − s)]). A latent that
     codes the pose but not the velocity (the trained pixel encoder, ``analysis.encoder_geometry``) then still tells a
     fast swing from a slow one through its motion; m = ``motion_scale``, in motion standard deviations.
+    ``random_target`` (ours, off by default; image observations): memory rows r_t = R(o_t), the codes of a frozen
+    random conv encoder of blurred frames (:class:`~curiosity.novelty.random_target.RandomTarget`); a real edge is
+    scored by novelty(R(o_{t+1})), an imagined one (no frame) by novelty(g(s')), g a head trained on replay batches to
+    predict R(o) from the agent's latent. The model plans in the trained latent; the novelty keeps R's geometry.
 With ``standardise=True`` the latent part is standardised per dimension by the memory's mean and standard deviation
 at the last refresh (the motion part of ``state_motion`` by its own), so the bandwidth, ``action_scale`` and
 ``motion_scale`` are in units of the latent spread, which drifts while the encoder trains.
@@ -33,10 +37,12 @@ from curiosity.intrinsic.base import IntrinsicContext, IntrinsicReward, latents_
 from curiosity.nets.onehot import one_hot
 from curiosity.novelty.memory import EmbeddingMemory
 from curiosity.novelty.protocols import NoveltyEstimator
+from curiosity.novelty.random_target import RandomTarget
 from curiosity.types import TransitionBatch
 
-INPUTS = ("state_action", "state", "state_motion")
+INPUTS = ("state_action", "state", "state_motion", "random_target")
 MEMORY_KEYS = ("intrinsic/memory_size", "memory/drift", "memory/refreshed", "timing/refresh_ms")
+TARGET_KEYS = ("novelty/target_loss",)  # random_target: the head's loss ‖g(s) − R(o)‖² on the last training batch
 
 
 class LatentNovelty(IntrinsicReward):
@@ -46,9 +52,10 @@ class LatentNovelty(IntrinsicReward):
         estimator: the novelty estimator (fitted at each refresh).
         memory: the embedding memory (exact or reservoir).
         context: the agent's parts; ``replay`` and ``encode`` are required (refreshes re-encode stored observations).
-        input: ``state_action``, ``state`` or ``state_motion``.
+        input: ``state_action``, ``state``, ``state_motion`` or ``random_target``.
         action_scale: c, the length of the action part of y (``state_action``).
         motion_scale: m, the weight of the standardised motion part (``state_motion``).
+        target: R and g of ``random_target`` (required there, None otherwise).
         standardise: standardise latents per dimension by the memory's statistics at each refresh.
         refresh_every: env steps between refreshes, counted from the end of the warm-up.
         refresh_drift: also refresh whenever :meth:`drift` exceeds this (standardised units); 0: off.
@@ -63,10 +70,14 @@ class LatentNovelty(IntrinsicReward):
 
     def __init__(self, estimator: NoveltyEstimator, memory: EmbeddingMemory, context: IntrinsicContext, *,
                  input: str = "state", action_scale: float = 1.0, motion_scale: float = 1.0, standardise: bool = True,
-                 refresh_every: int = 10, refresh_drift: float = 0.0, scale: float = 1.0) -> None:  # fmt: skip
+                 refresh_every: int = 10, refresh_drift: float = 0.0, scale: float = 1.0,
+                 target: RandomTarget | None = None) -> None:  # fmt: skip
         super().__init__(scale)
         if input not in INPUTS:
             raise ValueError(f"novelty input must be one of {INPUTS}, got {input!r}")
+        if (input == "random_target") != (target is not None):
+            raise ValueError("novelty input random_target needs its RandomTarget, and no other input takes one")
+        self.target = target
         if context.replay is None or context.encode is None:
             raise ValueError("latent novelty needs the agent's replay and encoder (IntrinsicContext.replay, .encode)")
         self.estimator, self.memory, self.replay, self.encode = estimator, memory, context.replay, context.encode
@@ -79,16 +90,22 @@ class LatentNovelty(IntrinsicReward):
         self.m_mean: Tensor | None = None  # the motion part's statistics (state_motion)
         self.m_std: Tensor | None = None
         self._ready = False
-        self.log_keys = (*MEMORY_KEYS, *estimator.log_keys)
+        self.log_keys = (*MEMORY_KEYS, *estimator.log_keys, *(TARGET_KEYS if target is not None else ()))
 
     @classmethod
     def from_context(cls, *, context: IntrinsicContext, estimator: NoveltyEstimator, memory_mode: str = "exact",
-                     memory_size: int = 100_000, **kwargs: Any) -> LatentNovelty:  # fmt: skip
-        """With an :class:`EmbeddingMemory` of ``memory_mode`` (``exact`` or ``reservoir`` of ``memory_size`` rows)."""
+                     memory_size: int = 100_000, target_dim: int = 4, target_hidden: int = 64,
+                     target_lr: float = 1e-3, target_blur: float = 4.0, **kwargs: Any) -> LatentNovelty:  # fmt: skip
+        """With an :class:`EmbeddingMemory` of ``memory_mode`` (``exact`` or ``reservoir`` of ``memory_size`` rows);
+        ``input=random_target`` builds its :class:`RandomTarget` from the ``target_*`` keys (ignored otherwise)."""
         if not isinstance(estimator, NoveltyEstimator):
             raise TypeError(f"estimator must be a NoveltyEstimator, got {type(estimator).__name__}")
         memory = EmbeddingMemory(mode=memory_mode, reservoir_size=memory_size, seed=context.seed)
-        return cls(estimator, memory, context, **kwargs)
+        target = None
+        if str(kwargs.get("input", "state")) == "random_target":
+            target = RandomTarget(tuple(context.obs_shape), context.latent_dim, dim=target_dim, hidden=target_hidden,
+                                  lr=target_lr, blur_sigma=target_blur, seed=context.seed).to(context.device)  # fmt: skip
+        return cls(estimator, memory, context, target=target, **kwargs)
 
     @property
     def ready(self) -> bool:
@@ -120,7 +137,7 @@ class LatentNovelty(IntrinsicReward):
                 raise ValueError("novelty input state_motion embeds transitions: z_next (the latent of o_{t+1}) is needed")
             return torch.cat([self._std(z_next), self._motion(z, z_next)], dim=1)
         z = self._std(z)
-        if self.input == "state":
+        if self.input in ("state", "random_target"):  # random_target: z holds R's codes (see observe and refresh)
             return z
         return torch.cat([z, self.action_scale * one_hot(a, self.n_actions).to(z.dtype)], dim=1)
 
@@ -131,7 +148,8 @@ class LatentNovelty(IntrinsicReward):
         def frames(k: np.ndarray) -> Tensor:
             return self.replay.transitions_at(k).next_obs if next_obs else self.replay.obs_at(k)
 
-        parts = [self.encode(frames(keys[i : i + 512]).to(self.device)) for i in range(0, len(keys), 512)]
+        encode = self.encode if self.target is None else self.target.codes  # random_target: R's codes
+        parts = [encode(frames(keys[i : i + 512]).to(self.device)) for i in range(0, len(keys), 512)]
         return torch.cat(parts)
 
     def _embed_stored(self, keys: np.ndarray, z: Tensor) -> Tensor:
@@ -153,8 +171,11 @@ class LatentNovelty(IntrinsicReward):
         """Re-embed every memory row and the random-phase reference with the current encoder; refit the estimator.
 
         Returns:
-            The memory's keys (M,) (global transition indices) and the latents (M, d) of their o_t just encoded.
+            The memory's keys (M,) (global transition indices) and the latents (M, d) of their o_t just encoded
+            (``random_target``: R's codes of them, R standardised on the warm-up's frames at the first refresh).
         """
+        if self.target is not None:
+            self.target.calibrate(self.replay.obs_at(np.arange(min(self.warmup_steps, self.replay.total_added) or 1)))
         keys = self.memory.keys().numpy()
         z = self._encode_stored(keys)
         z_next = self._encode_stored(keys, next_obs=True) if self.input == "state_motion" else None
@@ -203,12 +224,17 @@ class LatentNovelty(IntrinsicReward):
 
     # ------------------------------------------------------------------ rewards
     def novelty(self, z: Tensor, a: Tensor, z_next: Tensor) -> Tensor:
-        """Novelty of edges (z, a, z_next): (N, d), (N,), (N, d) -> (N,)."""
+        """Novelty of edges (z, a, z_next): (N, d), (N,), (N, d) -> (N,) (``random_target``: of g(z_next))."""
+        if self.target is not None:
+            return self.estimator(self._std(self.target.predict(z_next)))
         if self.input == "state":
             return self.estimator(self._std(z_next))
         return self.estimator(self.embed(z, a, z_next))
 
     def compute(self, batch: TransitionBatch) -> Tensor:
+        """Novelty of real transitions (``random_target``: of R(o_{t+1}), their frames' codes)."""
+        if self.target is not None:
+            return self.estimator(self._std(self.target.codes(batch.next_obs.to(self.device))))
         z, z_next = latents_of(batch, "latent novelty")
         return self.novelty(z, batch.act, z_next)
 
@@ -216,12 +242,19 @@ class LatentNovelty(IntrinsicReward):
         return self.novelty(z, a, z_next)
 
     def update(self, batch: TransitionBatch) -> dict[str, float]:
-        """Nothing trains here (the encoder trains in the agent)."""
-        return {}
+        """``random_target``: one step of the head g on the batch's (s_t, o_t) and (s_{t+1}, o_{t+1}) once R is
+        standardised; otherwise nothing trains here (the encoder trains in the agent)."""
+        if self.target is None or not bool(self.target.calibrated):
+            return {}
+        z, z_next = latents_of(batch, "latent novelty")
+        frames = torch.cat([batch.obs, batch.next_obs]).to(self.device)
+        return {"novelty/target_loss": self.target.fit_step(torch.cat([z, z_next]), frames)}
 
     def observe(self, batch: TransitionBatch) -> dict[str, float]:
         """Add each fresh transition's (s_t, a_t) to the memory; refresh when due (see the module docstring)."""
         z, z_next = latents_of(batch, "latent novelty")
+        if self.target is not None:  # the memory holds R's codes of o_t
+            z = self.target.codes(batch.obs.to(self.device))
         if batch.index is None:
             raise ValueError("latent novelty keys its memory by transition index: the batch must carry index")
         for row, (a, index) in enumerate(zip(batch.act.tolist(), batch.index.tolist(), strict=True)):
@@ -239,11 +272,14 @@ class LatentNovelty(IntrinsicReward):
     # ------------------------------------------------------------------ checkpointing
     def to(self, device: torch.device | str) -> LatentNovelty:
         self.device = device
+        if self.target is not None:
+            self.target.to(device)
         return self
 
     def state_dict(self) -> dict[str, Any]:
         return {"memory": self.memory.state_dict(), "ready": self._ready, "z_mean": self.z_mean, "z_std": self.z_std,
-                "m_mean": self.m_mean, "m_std": self.m_std, "estimator": self.estimator.state_dict()}  # fmt: skip
+                "m_mean": self.m_mean, "m_std": self.m_std, "estimator": self.estimator.state_dict(),
+                "target": None if self.target is None else self.target.checkpoint()}  # fmt: skip
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
         self.memory.load_state_dict(state["memory"])
@@ -252,5 +288,7 @@ class LatentNovelty(IntrinsicReward):
         self.m_mean, self.m_std = state.get("m_mean"), state.get("m_std")  # checkpoints before state_motion had none
         if state["estimator"] is not None:
             self.estimator.load_state_dict(state["estimator"])
+        if self.target is not None:
+            self.target.restore(state["target"])
         if self._ready:
             self.estimator.set_memory(self.memory.tensor())
