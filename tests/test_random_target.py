@@ -49,7 +49,7 @@ def test_the_random_encoder_is_frozen_standardised_once_and_the_head_learns_its_
     first = target.fit_step(z, frames)
     for _ in range(400):
         last = target.fit_step(z, frames)
-    assert last < 0.3 * first, (first, last)  # measured: 3.9 -> 0.05
+    assert last < 0.3 * first, (first, last)  # measured: 3.89 -> 0.010
     assert all(torch.equal(v, target.encoder.state_dict()[k]) for k, v in weights.items())  # exact: R never trains
     assert float(target_loss(target.predict(z), codes)) < 0.3 * first
 
