@@ -5,6 +5,8 @@ BIN    := $(VENV)/bin
 # The CPU build of torch. On the project's machines `torch==2.13.0` resolves to a local CPU wheel; elsewhere pass
 # your platform's CPU build, e.g. `make test TORCH="torch --index-url <PyTorch's CPU wheel index>"`.
 TORCH  ?= torch==2.13.0
+# Test workers (pytest-xdist): one per core of the 2-core CI machine; `make test WORKERS=auto` takes every core.
+WORKERS ?= 2
 
 .PHONY: setup run test lint clean
 
@@ -21,7 +23,7 @@ run: setup
 	$(BIN)/python -m runners.train $(ARGS)
 
 test: setup
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n $(WORKERS) --durations=15
 
 lint: setup
 	$(BIN)/ruff check .

@@ -20,6 +20,9 @@ REPO = Path(__file__).resolve().parents[1]
 CONF = REPO / "conf"
 
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+if os.environ.get("PYTEST_XDIST_WORKER"):  # `make test` runs the suite in parallel workers (pytest-xdist): one torch
+    os.environ.setdefault("OMP_NUM_THREADS", "1")  # thread each, and in the CLIs they launch, so that the workers do
+    torch.set_num_threads(1)  # not oversubscribe the cores
 setup()
 
 
