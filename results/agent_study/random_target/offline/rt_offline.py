@@ -35,7 +35,8 @@ print(f"transitions {n}, fit on first {split}")
 
 
 def kde_nov(mem, q):
-    d = torch.cdist(mem, mem); d.fill_diagonal_(float("inf"))
+    d = torch.cdist(mem, mem)
+    d.fill_diagonal_(float("inf"))
     h = 2 * d.min(1).values.median()
     dq = torch.cdist(q, mem)
     return -(torch.logsumexp(-dq.square() / (2 * h * h), 1) - np.log(len(mem)))
@@ -44,19 +45,23 @@ def kde_nov(mem, q):
 torch.manual_seed(0)
 g = tanh_mlp([zs.shape[1], 64, 64, rs.shape[1]])
 opt = torch.optim.Adam(g.parameters(), 1e-3)
-for it in range(4000):
+for _ in range(4000):
     i = torch.randint(0, split, (64,))
     loss = (g(zs[i]) - rs[i]).square().sum(-1).mean()
-    opt.zero_grad(); loss.backward(); opt.step()
+    opt.zero_grad()
+    loss.backward()
+    opt.step()
 with torch.no_grad():
     test = torch.arange(split, n)
     gz = g(zs)
     r2 = 1 - (gz[test] - rs[test]).square().sum(0) / (rs[test] - rs[test].mean(0)).square().sum(0)
     print("R2 of g(z) -> r on later states per coord", [round(float(v), 2) for v in r2])
     q = test[::5]
-    nov_r = kde_nov(rs[:split], rs[q]); nov_g = kde_nov(rs[:split], gz[q]); nov_z = kde_nov(zs[:split], zs[q])
-    print("Spearman with novelty on r: g(z) vs r-memory %.2f; z on z-memory %.2f" % (
-        stats.spearmanr(nov_r, nov_g)[0], stats.spearmanr(nov_r, nov_z)[0]))
+    nov_r = kde_nov(rs[:split], rs[q])
+    nov_g = kde_nov(rs[:split], gz[q])
+    nov_z = kde_nov(zs[:split], zs[q])
+    print(f"Spearman with novelty on r: g(z) vs r-memory {stats.spearmanr(nov_r, nov_g)[0]:.2f}; "
+          f"z on z-memory {stats.spearmanr(nov_r, nov_z)[0]:.2f}")
     # imagined: learned model rolled k steps with the actions taken, from z (raw), then standardise and g
     for k in (4, 8, 20):
         starts = test[test < n - k][::5]
