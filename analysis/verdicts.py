@@ -18,8 +18,9 @@ and *not supported* otherwise (weak evidence: a small sample rarely finds a diff
 *reversed* when ``A < B`` would be supported and *supported* otherwise. A claim is supported when all its comparisons
 are, reversed when any is reversed, and not supported otherwise; comparisons shown beside a claim (Table 1's other
 readings of the paper's agent and the oracle-model planner, Table 2's default agents) are tested the same way but do
-not enter its verdict. No correction for multiple comparisons. A claim whose table is missing, has a row short of its
-seeds or lists unfinished runs gets no verdict (``pending``). For a value at an env step (the spread of Figure 6), a
+not enter its verdict. No correction for multiple comparisons. A claim whose table is missing, has a row it counts
+short of its seeds or lists unfinished runs gets no verdict (``pending``); a comparison beside a claim is pending on its
+own, without holding the claim back. For a value at an env step (the spread of Figure 6), a
 row's seeds are its finished runs (``steps_to_goal.csv``): a run that reached the goal before that step has no value
 there, so the test is over the runs still going at the step, and the verdict says how many those are.
 """
