@@ -40,8 +40,9 @@ def table(groups: dict[tuple[str, str], list[np.ndarray]]) -> str:
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for (method, distractor), rows in sorted(groups.items()):
         x = np.array(rows)
-        mean, se = x.mean(0), x.std(0, ddof=1) / np.sqrt(len(x))
-        cells = [f"{m:.3f} ± {s:.3f}" for m, s in zip(mean, se, strict=True)]
+        mean = x.mean(0)
+        se = x.std(0, ddof=1) / np.sqrt(len(x)) if len(x) > 1 else [None] * len(mean)  # no SE from one seed
+        cells = [f"{m:.3f} ± {s:.3f}" if s is not None else f"{m:.3f} ± –" for m, s in zip(mean, se, strict=True)]
         cells = cells[:-1] + ["–"] * (width + 1 - len(cells)) + cells[-1:]
         lines.append(f"| {method} | {distractor} | {len(x)} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
