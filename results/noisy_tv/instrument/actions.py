@@ -25,7 +25,7 @@ def runs(root: Path) -> dict[tuple[str, str], list[np.ndarray]]:
     local = sorted(p.parent for p in root.rglob("summary.json"))
     for run in local + included_runs(root, local):
         summary = run / "summary.json"
-        cfg = OmegaConf.load(summary.parent / ".hydra" / "config.yaml")
+        cfg = OmegaConf.load(run / ".hydra" / "config.yaml")
         freq = np.array(json.loads(summary.read_text())["behaviour"]["action_freq"], dtype=float)
         noop = get_class(cfg.env._target_).noop_action
         distractor = str(OmegaConf.select(cfg, "env.distractor", default="none"))

@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from curiosity.envs.distractor import find_tv
 from curiosity.envs.wrappers import normalise_pixels
 from curiosity.nets.preprocess import GaussianBlur
 from curiosity.runtime.restore import restore_run
@@ -44,8 +45,9 @@ def measure(run_dir: Path) -> dict:
     run = restore_run(run_dir)
     cfg, agent = run.cfg, run.agent
     model, replay = agent.model, agent.replay
-    tv_action = int(cfg.env.n_actions) - 1
-    size, row, col = int(cfg.env.tv.size), int(cfg.env.tv.row), int(cfg.env.tv.col)
+    tv_env = find_tv(run.env)  # the restored env's TV: its action and patch, as the run had them
+    assert tv_env is not None and tv_env.tv_action is not None, f"{run_dir}: no remote-control TV in this run"
+    tv_action, size = tv_env.tv_action, tv_env.size
     first = replay.total_added - len(replay)
     index = np.arange(max(first, int(cfg.budget.warmup_steps)), replay.total_added)
     rng = np.random.default_rng(0)
@@ -56,11 +58,11 @@ def measure(run_dir: Path) -> dict:
         pe = (model.next(z, act) - z_next).square().sum(1)
         tv = act == tv_action
         dis = torch.stack([model.ensemble_disagreement(z, torch.full_like(act, a))
-                           for a in range(int(cfg.env.n_actions))], dim=1)  # fmt: skip
+                           for a in range(tv_action + 1)], dim=1)  # fmt: skip
         redrawn = batch.obs.clone()
         noise = normalise_pixels(rng.integers(0, 256, size=(len(index), size, size), dtype=np.uint8))
         redrawn = redrawn.unsqueeze(1) if redrawn.dim() == 3 else redrawn  # (B, frames, H, W); the newest is last
-        redrawn[:, -1, row : row + size, col : col + size] = torch.as_tensor(noise)
+        redrawn[:, -1, tv_env.rows, tv_env.cols] = torch.as_tensor(noise)
         redrawn = redrawn.reshape(batch.obs.shape)
         patch_shift = (encode(model, redrawn) - z).square().sum(1)
         step_shift = (z_next - z).square().sum(1)[~tv]
