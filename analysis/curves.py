@@ -80,3 +80,23 @@ def training_iterations(run: pd.DataFrame) -> pd.Series:
     step) times the env steps since the previous row, summed."""
     per_step = run["train/iterations"].fillna(0.0) if "train/iterations" in run else pd.Series(0.0, index=run.index)
     return (per_step * run["step"].diff().fillna(run["step"].iloc[0])).cumsum()
+
+
+def running_rate(run: pd.DataFrame, column: str, warmup_steps: int = 0) -> pd.Series:
+    """One run's running mean of a per-step 0/1 column (e.g. ``behaviour/tv``) logged as window means: at each row
+    that logs it, the mean over every agent step so far. A row's window is the env steps since the previous row (or
+    since the ``warmup_steps`` random steps, which log no behaviour); rows written twice (a resumed run) count once,
+    the last. The last value is the run's total rate (``summary.json``'s ``behaviour.tv_rate`` for ``behaviour/tv``).
+
+    Args:
+        run: one run's ``metrics.csv`` rows, with ``step`` and ``column``.
+    Returns:
+        the running rate indexed by env step (rows without ``column`` left out).
+    """
+    rows = run.drop_duplicates("step", keep="last").sort_values("step")
+    steps = rows["step"].to_numpy(dtype=float)
+    covered = steps - np.maximum(np.r_[0.0, steps[:-1]], warmup_steps)  # env steps in each row's window
+    value = rows[column].to_numpy(dtype=float) if column in rows else np.full(steps.size, np.nan)
+    logged = ~np.isnan(value)
+    rate = np.cumsum(value[logged] * covered[logged]) / np.cumsum(covered[logged])
+    return pd.Series(rate, index=rows["step"].to_numpy()[logged], name=column)

@@ -12,8 +12,9 @@
 - ``intrinsic`` (Figure 7 analogue): ``intrinsic/reward`` against env steps, mean and band, with each row's median
   "stable" step (``analysis.curves``) dashed; ``stability.{md,csv}`` list the stable step of every seed;
 - ``behaviour``: ``behaviour/directed`` and ``behaviour/repeat`` against env steps, where runs log them;
-- ``tv_presses`` (only where some run has a noisy TV's remote, ``env.distractor=noisy_tv``): ``behaviour/tv``, the
-  fraction of the agent's steps that pressed the TV, against env steps, with a random policy's rate dotted.
+- ``tv_presses`` (only where some run has a noisy TV's remote, ``env.distractor=noisy_tv``): the fraction of the
+  agent's steps so far that pressed the TV (``analysis.curves.running_rate`` of ``behaviour/tv``; a run's final
+  rate, the table's, carried on after it ended), mean and band, against env steps, with a random policy's rate dotted.
 
 A panel whose runs do not log its column says so instead of being left out.
 """
@@ -29,7 +30,7 @@ from matplotlib.axes import Axes
 
 from analysis.cli import Options, parser, run
 from analysis.collect import load_metrics
-from analysis.curves import STABLE_CV, STABLE_WINDOW, mean_band, per_run, stable_step, training_iterations
+from analysis.curves import STABLE_CV, STABLE_WINDOW, mean_band, per_run, running_rate, stable_step, training_iterations
 from analysis.plotting import colours, legend_below, note, panels, save
 from analysis.rows import label_rows, load_runs, pool_rows
 from analysis.stats import iqm
@@ -199,21 +200,35 @@ def plot_behaviour(runs: pd.DataFrame, metrics: pd.DataFrame, out: Path) -> list
     return save(fig, out, "behaviour")
 
 
+def tv_press_curves(metrics: pd.DataFrame) -> pd.DataFrame:
+    """Each TV run's running press rate (``running_rate`` of ``behaviour/tv`` after ``budget.warmup_steps``) as a
+    (steps, runs) table, a run's final rate carried on after it ended."""
+    curves = []
+    for run_dir, g in metrics.groupby("run_dir", sort=True):
+        if "behaviour/tv" in g and g["behaviour/tv"].notna().any():
+            warmup = int(g["config"].iloc[0].get("budget.warmup_steps", 0))
+            curves.append(running_rate(g, "behaviour/tv", warmup).rename(run_dir))
+    return pd.concat(curves, axis=1).sort_index().ffill() if curves else pd.DataFrame()
+
+
 def plot_tv_presses(runs: pd.DataFrame, metrics: pd.DataFrame, out: Path) -> list[Path]:
-    """``behaviour/tv`` against env steps per row, one panel per env; nothing when no run has a TV remote."""
+    """The running TV-press rate against env steps per row (``tv_press_curves``), one panel per env; nothing when no
+    run has a TV remote."""
     if "behaviour/tv" not in metrics or metrics["behaviour/tv"].isna().all():
         return []
-    logged = metrics.dropna(subset=["behaviour/tv"])
+    tv_runs = metrics.loc[metrics["behaviour/tv"].notna(), "run_dir"].unique()
+    logged = metrics[metrics["run_dir"].isin(tv_runs)]
     envs, colour = sorted(logged["env"].unique()), colours(logged["row"])
     fig, axes = panels(len(envs))
     for ax, env in zip(axes, envs, strict=True):
         e = logged[logged["env"] == env]
         for row, g in e.groupby("row", sort=True):
-            wide = per_run(g, "behaviour/tv")
+            wide = tv_press_curves(g)
             _band(ax, wide, colour[row], f"{row} (n={wide.shape[1]})")
         n_actions = int(e["config"].iloc[0].get("env.n_actions", 4))
         ax.axhline(1 / n_actions, color="0.4", ls=":", lw=1, label=f"random policy (1/{n_actions})")
-        ax.set(xlabel="env steps", ylabel="TV presses (fraction of steps)", title=env, ylim=(0, 1))
+        ax.set(xlabel="env steps", ylabel="TV presses so far (fraction of the agent's steps)", title=env)
+        ax.set_ylim(bottom=0)
     legend_below(fig, axes)
     return save(fig, out, "tv_presses")
 

@@ -22,8 +22,8 @@ CAPTIONS = {
                "yardstick `info/latent_logdet` (log det of the next latents' covariance + 1e-3 I) of every run.",
     "intrinsic": "Figure 7 analogue: intrinsic reward (symlog scale), mean and band; dashed: a row's median stable step.",
     "behaviour": "Behaviour: the rate of directed actions and of repeated actions, where runs log them.",
-    "tv_presses": "Noisy TV: the fraction of the agent's steps that pressed the TV's remote, mean and band; dotted: a "
-                  "random policy.",
+    "tv_presses": "Noisy TV: the fraction of the agent's steps so far that pressed the TV's remote (a run's final "
+                  "rate, the table's, carried on after it ended), mean and band; dotted: a random policy.",
 }  # fmt: skip
 
 

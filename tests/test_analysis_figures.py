@@ -8,7 +8,7 @@ import pandas as pd
 import pytest
 from PIL import Image
 
-from analysis.curves import mean_band, stable_step
+from analysis.curves import mean_band, running_rate, stable_step
 from analysis.figures import FIGURES, write_figures
 from tests.synthetic_runs import make_runs
 from tests.test_analysis import analysis
@@ -48,6 +48,17 @@ def test_stable_step_and_band_on_known_series() -> None:
     curve = mean_band(pd.DataFrame({"a": [1.0, 2.0], "b": [3.0, np.nan]}, index=[10, 20]))
     assert curve.mean.tolist() == [2.0, 2.0] and curve.n.tolist() == [2, 1]
     assert curve.low[0] == 1.0 and curve.high[0] == 3.0 and np.isnan(curve.low[1])  # percentiles of {1, 2, 3}
+
+
+def test_running_rate_weights_each_logged_window_by_its_env_steps() -> None:
+    """Rows every 10 steps, 15 warm-up steps (no behaviour logged): the row at 20 covers steps 16-20 (5 steps), the
+    next ones 10 each; a row written twice (a resumed run) counts once, the last."""
+    run = pd.DataFrame({"step": [10, 20, 30, 30, 40, 45], "behaviour/tv": [np.nan, 1.0, 0.0, 0.5, 0.0, 0.2]})
+    rate = running_rate(run, "behaviour/tv", warmup_steps=15)
+    assert rate.index.tolist() == [20, 30, 40, 45]
+    presses = np.cumsum([5 * 1.0, 10 * 0.5, 10 * 0.0, 5 * 0.2])
+    assert rate.to_numpy() == pytest.approx(presses / np.cumsum([5, 10, 10, 5]))
+    assert running_rate(run.drop(columns="behaviour/tv"), "behaviour/tv").empty
 
 
 def test_the_command_rewrites_the_same_bytes(written: tuple, tmp_path) -> None:

@@ -172,7 +172,7 @@ def test_the_compute_line_sums_the_finished_runs_wall_seconds_per_env() -> None:
 
 def test_the_noisy_tv_table_sets_each_method_with_the_tv_beside_itself_without(tmp_path: Path) -> None:
     from analysis.distractor import distractor_table
-    from analysis.figures import write_figures
+    from analysis.figures import load, tv_press_curves, write_figures
     from analysis.rows import load_runs
 
     for seed, (clean, tv) in enumerate([(500, 900), (600, None), (700, 1100)]):
@@ -195,6 +195,8 @@ def test_the_noisy_tv_table_sets_each_method_with_the_tv_beside_itself_without(t
     assert set(steps["row"]) == {f"{m} [env.distractor={d}]" for m in ("icm", "ours_density") for d in ("none", "noisy_tv")}
     written = {p.name for p in write_figures(tmp_path, tmp_path / "report")}
     assert {"tv_presses.png", "tv_presses.pdf"} <= written
+    curves = tv_press_curves(load(tmp_path, [], [])[1])  # the figure's curves end at each run's rate in the table
+    assert curves.shape[1] == 6 and sorted(curves.iloc[-1].round(6)) == [0.25] * 3 + [0.5, 0.6, 0.7]
 
 
 def test_no_distractor_no_tv_table_and_no_tv_figure(tmp_path: Path) -> None:
