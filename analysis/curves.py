@@ -79,7 +79,13 @@ def training_iterations(run: pd.DataFrame) -> pd.Series:
     """Cumulative training iterations at each logged row of one run: ``train/iterations`` (the window's mean per env
     step) times the env steps since the previous row, summed."""
     per_step = run["train/iterations"].fillna(0.0) if "train/iterations" in run else pd.Series(0.0, index=run.index)
-    return (per_step * run["step"].diff().fillna(run["step"].iloc[0])).cumsum()
+    return (per_step * row_spans(run["step"].to_numpy(dtype=float))).cumsum()
+
+
+def row_spans(steps: np.ndarray, warmup_steps: int = 0) -> np.ndarray:
+    """The env steps each logged row's window covers (T,): since the previous row's step (T,), or since the end of the
+    ``warmup_steps`` random steps, whichever is later (the first row: since step 0)."""
+    return steps - np.maximum(np.r_[0.0, steps[:-1]], warmup_steps)
 
 
 def running_rate(run: pd.DataFrame, column: str, warmup_steps: int = 0) -> pd.Series:
@@ -94,9 +100,8 @@ def running_rate(run: pd.DataFrame, column: str, warmup_steps: int = 0) -> pd.Se
         the running rate indexed by env step (rows without ``column`` left out).
     """
     rows = run.drop_duplicates("step", keep="last").sort_values("step")
-    steps = rows["step"].to_numpy(dtype=float)
-    covered = steps - np.maximum(np.r_[0.0, steps[:-1]], warmup_steps)  # env steps in each row's window
-    value = rows[column].to_numpy(dtype=float) if column in rows else np.full(steps.size, np.nan)
+    covered = row_spans(rows["step"].to_numpy(dtype=float), warmup_steps)
+    value = rows[column].to_numpy(dtype=float) if column in rows else np.full(covered.size, np.nan)
     logged = ~np.isnan(value)
     rate = np.cumsum(value[logged] * covered[logged]) / np.cumsum(covered[logged])
     return pd.Series(rate, index=rows["step"].to_numpy()[logged], name=column)
