@@ -38,6 +38,7 @@ def test_smoke_run_writes_csv_summary_and_tensorboard(tmp_path: Path) -> None:
     assert summary["seed"] == 7 and summary["method"] == "random" and summary["max_steps"] == 200
     assert summary["env_steps"] == 200 and summary["reached_goal"] is False and summary["steps_to_goal"] is None
     assert (summary["wall_seconds"] > 0 and len(summary["git_commit"]) in (7, 40)) or summary["git_commit"] == "unknown"
+    assert summary["cpu_seconds"] > 0  # the process's CPU time over the loop (what a study's cost column reads)
     machine = summary["machine"]  # which CPU made it: a seed repeats exactly only on the same machine
     assert machine["cpu"] and machine["cpu_capability"] and machine["torch"].startswith("2.") and machine["torch_threads"] >= 1
     events = list((out / "tb").glob("events.out.tfevents.*"))

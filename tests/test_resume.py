@@ -73,6 +73,8 @@ def test_same_seed_same_metrics_and_killed_runs_resume_to_the_same_metrics(tmp_p
     assert metrics_without_wall_clock(killed) == reference  # exact: resumed = uninterrupted, on one machine
     steps = [int(r[0]) for r in metrics_without_wall_clock(killed)[1:]]
     assert steps == sorted(set(steps))  # no step twice, none missing
+    saved = load_checkpoint(killed)
+    assert saved["cpu_seconds"] > 0  # CPU time is carried through the resumes (summed, like wall_seconds)
 
     # A truncated last checkpoint: the run resumes from the one before (step 100) and ends with the same file again.
     newest = killed / "checkpoint.pt"

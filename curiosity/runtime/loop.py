@@ -188,8 +188,10 @@ class _Run:
         self.coverage = GridCoverage(cfg.env.coverage_low, cfg.env.coverage_high, cfg.env.coverage_bins)
         self.rng = np.random.default_rng(cfg.seed)
         self.step, self.steps_to_goal, self.wall_before, self.resets, self.goals = 0, None, 0.0, 0, 0
+        self.cpu_before: float | None = 0.0  # None: resumed from a checkpoint made before CPU time was kept
         self.stop_signal: int | None = None
         self._start: float | None = None  # perf_counter at the start of execute()
+        self._cpu_start: float | None = None  # process_time at the start of execute()
         columns = [*CHART_KEYS, *self.behaviour.keys, *self.agent.metric_keys]
         if ckpt is None:
             self.obs, _ = self.env.reset(seed=cfg.seed)
@@ -212,6 +214,7 @@ class _Run:
         set_rng_states(ckpt["rng"])
         self.obs, self.step, self.steps_to_goal = ckpt["obs"], int(ckpt["step"]), ckpt["steps_to_goal"]
         self.wall_before = float(ckpt["wall_seconds"])
+        self.cpu_before = None if ckpt.get("cpu_seconds") is None else float(ckpt["cpu_seconds"])
         self.logger = RunLogger(self.run_dir, columns, resume=ckpt["logger"])
         log.info("resuming %s from its checkpoint at env step %d", self.run_dir, self.step)
 
@@ -224,17 +227,23 @@ class _Run:
             "agent": self.agent.state_dict(),
             "coverage": self.coverage.state_dict(), "behaviour": self.behaviour.state_dict(),
             "loop_rng": self.rng.bit_generator.state, "rng": rng_states(), "logger": self.logger.state_dict(),
-            "wall_seconds": self._wall(),
+            "wall_seconds": self._wall(), "cpu_seconds": self._cpu(),
         })  # fmt: skip
 
     def _wall(self) -> float:
         return self.wall_before + (0.0 if self._start is None else time.perf_counter() - self._start)
 
+    def _cpu(self) -> float | None:
+        """CPU seconds of this run's process (every thread) inside ``execute``, summed over resumes; None if unknown."""
+        if self.cpu_before is None:
+            return None
+        return self.cpu_before + (0.0 if self._cpu_start is None else time.process_time() - self._cpu_start)
+
     def _on_signal(self, signum: int, frame: object) -> None:
         self.stop_signal = signum
 
     def execute(self) -> RunSummary:
-        self._start = time.perf_counter()
+        self._start, self._cpu_start = time.perf_counter(), time.process_time()
         handlers = {}
         for sig in (signal.SIGTERM, signal.SIGINT):
             try:
@@ -320,7 +329,7 @@ class _Run:
             method=self.cfg.method_label, seed=int(self.cfg.seed), env=self.cfg.env.id, steps_to_goal=self.steps_to_goal,
             reached_goal=self.steps_to_goal is not None, env_steps=self.step, max_steps=budget.max_steps,
             warmup_steps=budget.warmup_steps, final_coverage=self.coverage.fraction, wall_seconds=wall,
-            steps_per_second=self.step / max(wall, 1e-9), git_commit=commit, git_dirty=dirty,
+            steps_per_second=self.step / max(wall, 1e-9), cpu_seconds=self._cpu(), git_commit=commit, git_dirty=dirty,
             planner_sampled_candidates=sampled_candidates(self.cfg),
             behaviour=self.behaviour.summary(), agent=self.agent.summary(), episode_resets=self.resets, goals=self.goals,
             machine=machine(),

@@ -37,7 +37,9 @@ class RunSummary:
     past the goal (``budget.stop_at_goal=false``), the goals. ``goals`` counts the times the goal was reached (absent
     from runs made before it existed); ``steps_to_goal`` is always the first. ``machine`` is the CPU and torch build
     that finished the run (:mod:`curiosity.runtime.machine`; a run resumed on another machine was partly made by that
-    one): the same config and seed repeat exactly only on the same machine.
+    one): the same config and seed repeat exactly only on the same machine. ``cpu_seconds`` is the CPU time of the run's
+process over the loop (``time.process_time``: every thread, start-up excluded as in ``wall_seconds``), summed over its
+resumes; ``None`` for runs made before it existed or resumed from a checkpoint without it.
     """
 
     method: str
@@ -59,6 +61,7 @@ class RunSummary:
     episode_resets: int = 0  # env resets: non-goal terminations, and goals when the run goes on past them
     goals: int | None = None  # times the goal was reached (None: a run made before the field existed)
     machine: dict[str, Any] | None = None  # curiosity.runtime.machine.machine() (None: a run made before it existed)
+    cpu_seconds: float | None = None  # the run's CPU time (process_time, every thread), resumes summed; None: unknown
 
     def write(self, run_dir: str | Path) -> Path:
         """Write ``summary.json`` atomically (temporary file + rename)."""
