@@ -6,6 +6,7 @@ import pytest
 import torch
 
 from curiosity.nets import BackwardPredictor, ConvEncoder, MLPEncoder, QNetwork, ResidualTransition, RewardModel, one_hot
+from curiosity.nets.encoders import conv_feature_side
 from curiosity.nets.activations import FastTanh
 
 
@@ -141,3 +142,54 @@ def test_conv_encoder_flattens_any_frame_size() -> None:
     enc = ConvEncoder(in_channels=2, latent_dim=3, frame_size=48)
     assert enc(torch.zeros(5, 2, 48, 48)).shape == (5, 3)
     assert ConvEncoder().head.in_features == 128
+
+
+@pytest.mark.parametrize(("kwargs", "flat"), [
+    ({"downsample": 2, "pools": (2, 3)}, 128),  # 16 x 16 after the blur: conv 16 -> pool 8 -> conv 6 -> pool 2
+    ({"strides": (2, 2, 1), "pools": (1, 3)}, 128),  # strided: 32 -> 16 -> 8 -> conv 6 -> pool 2
+    ({"downsample": 2, "pools": (2, 3), "channels": (8, 8, 16)}, 64),  # narrower
+])
+def test_cheaper_conv_encoders_keep_nsrs_structure_and_encode_32px_observations(kwargs: dict, flat: int) -> None:
+    enc = ConvEncoder(in_channels=4, latent_dim=4, blur_sigma=4.0, **kwargs)
+    assert enc.head.in_features == flat
+    assert len(enc.features) == len(ConvEncoder().features)  # module indices as NSRS's (a pool of 1: Identity)
+    obs = torch.rand(6, 4, 32, 32) * 2 - 1
+    z = enc(obs)
+    assert z.shape == (6, 4)
+    z.sum().backward()
+    assert all(p.grad is not None and torch.isfinite(p.grad).all() for p in enc.parameters())
+
+
+def test_default_conv_encoder_keeps_its_parameter_names() -> None:
+    # the options' defaults build NSRS's encoder module for module: checkpoints of earlier runs load unchanged
+    names = [n for n, _ in ConvEncoder(blur_sigma=4.0).named_parameters()]
+    assert names == ["features.0.weight", "features.0.bias", "features.2.weight", "features.2.bias",
+                     "features.5.weight", "features.5.bias", "head.weight", "head.bias"]  # fmt: skip
+
+
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({"downsample": 2}, "needs a blur"),
+    ({"blur_sigma": 4.0, "downsample": 4}, "leave no features"),  # 8 x 8 frames through a pool of 4 and of 3
+    ({"strides": (2, 2, 2)}, "leave no features"),
+    ({"channels": (8, 16)}, "take 3 values"),
+])
+def test_conv_encoder_options_that_cannot_build_are_refused_in_one_line(kwargs: dict, match: str) -> None:
+    with pytest.raises(ValueError, match=match) as info:
+        ConvEncoder(**kwargs)
+    assert "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize("frame_size", [16, 32])
+@pytest.mark.parametrize("downsample", [1, 2])
+@pytest.mark.parametrize("strides", [(1, 1, 1), (2, 1, 1), (2, 2, 1), (1, 2, 2)])
+@pytest.mark.parametrize("pools", [(1, 1), (2, 3), (4, 3), (4, 2)])
+def test_conv_feature_side_is_the_side_torch_computes(frame_size: int, downsample: int, strides: tuple, pools: tuple) -> None:
+    # the arithmetic that config validation refuses a layout by, against the layers themselves
+    side = conv_feature_side(frame_size, downsample, strides, pools)
+    if side < 1:
+        with pytest.raises(ValueError, match="leave no features"):
+            ConvEncoder(frame_size=frame_size, blur_sigma=4.0, downsample=downsample, strides=strides, pools=pools)
+        return
+    enc = ConvEncoder(frame_size=frame_size, blur_sigma=4.0, downsample=downsample, strides=strides, pools=pools)
+    n = -(-frame_size // downsample)
+    assert enc.features[:-1](torch.zeros(1, 4, n, n)).shape[-2:] == (side, side)

@@ -57,9 +57,23 @@ def test_blur_as_band_matrices_equals_the_two_padded_convolutions(sigma: float, 
     torch.testing.assert_close(blur(frames.double()), blur.reference(frames.double()), rtol=1e-10, atol=1e-10)
 
 
-def test_blur_rejects_a_non_positive_sigma():
+@pytest.mark.parametrize("stride", [2, 3])
+def test_a_strided_blur_is_the_full_blur_sampled_at_every_stride_th_pixel(stride: int):
+    # the band matrices' rows 0, s, 2s, ... against the full blur's pixels and the strided padded convolutions:
+    # equal to float rounding (tolerance), not bit for bit
+    frames = torch.rand(3, 4, 32, 32, generator=torch.Generator().manual_seed(1)) * 2 - 1
+    full, strided = GaussianBlur(4.0), GaussianBlur(4.0, stride=stride)
+    out = strided(frames)
+    assert out.shape == (3, 4, -(-32 // stride), -(-32 // stride))
+    torch.testing.assert_close(out, full(frames)[..., ::stride, ::stride], rtol=1e-5, atol=1e-5)
+    torch.testing.assert_close(out, strided.reference(frames), rtol=1e-5, atol=1e-5)
+
+
+def test_blur_rejects_a_non_positive_sigma_or_stride():
     with pytest.raises(ValueError, match="sigma"):
         GaussianBlur(0.0)
+    with pytest.raises(ValueError, match="stride"):
+        GaussianBlur(4.0, stride=0)
 
 
 def test_frame_differences_are_the_newest_frame_then_successive_differences():

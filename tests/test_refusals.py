@@ -53,6 +53,8 @@ OUT_OF_RANGE = dict([
     _out_of_range("intrinsic.terms.novelty.refresh_every", "0"), _out_of_range("agent.q_coef", "-1"),
     _out_of_range("agent.q_target_every", "0"), _out_of_range("agent.first_call_min_iterations", "-1"),
     _out_of_range("env.frame_size", "4"), _out_of_range("encoder.blur_sigma", "-1"),
+    _out_of_range("encoder.downsample", "0"), _out_of_range("encoder.channels", "[8,0,32]"),
+    _out_of_range("encoder.strides", "[1,1]"), _out_of_range("encoder.pools", "[4,3,2]"),
     _out_of_range("env.frame_stack", "0"), _out_of_range("env.state_dim", "0"),
     _out_of_range("env.n_actions", "1"), _out_of_range("env.coverage_bins", "[10,10,0,10]"),
     _out_of_range("budget.max_steps", "0"), _out_of_range("budget.warmup_steps", "-1"),
@@ -86,6 +88,8 @@ OTHER = {
     "estimator.k=64 (the first memory)": Case(("estimator=knn", "estimator.k=64"), "estimator.k"),
     "budget.warmup_steps=1 (< n_step)": Case(("budget.warmup_steps=1",), "budget.warmup_steps"),
     "budget.max_steps=64 (= warm-up)": Case(("budget.max_steps=64",), "budget.max_steps"),
+    "encoder.downsample=2 without a blur": Case(("encoder=conv", "encoder.downsample=2"), "encoder.downsample=2"),
+    "encoder.downsample=4 (8 x 8 frames through pools 4, 3)": Case(("encoder.downsample=4",), "encoder.pools"),
     "encoder.random_dim=4 (= internal_dim)": Case(("encoder=conv_with_random", "encoder.random_dim=4"), "encoder.random_dim"),
     "nsrs preset": Case(("baseline=nsrs", "planner.horizon=0"), "planner.horizon=0"),
     # keys and values the schema does not have

@@ -136,6 +136,10 @@ class ConvEncoderConfig:
     differences: bool = False  # newest frame + successive frame differences instead of the frames
     difference_gain: float = 1.0
     frozen: bool = False  # true: the encoder keeps its random initial weights (no loss trains it)
+    downsample: int = 1  # with a blur: keep every downsample-th blurred pixel per axis (2: 16x16 frames); 1: all
+    channels: list[int] = field(default_factory=lambda: [8, 16, 32])  # the three convolutions' output channels
+    strides: list[int] = field(default_factory=lambda: [1, 1, 1])  # the three convolutions' strides
+    pools: list[int] = field(default_factory=lambda: [4, 3])  # max-pools after conv 2 and conv 3 (>= 4 pads 1; 1: none)
 
 
 @dataclass

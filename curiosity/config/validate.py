@@ -86,6 +86,10 @@ RULES: list[Rule] = [
     ("intrinsic.terms.novelty.target_blur", lambda v: v >= 0, "a number >= 0 (0: no blur)"),
     ("agent.probe_every", lambda v: v >= 0, "an integer >= 0 (0: no model probe)"),
     ("encoder.hidden", lambda v: all(w >= 1 for w in v), "a list of layer widths >= 1"),
+    ("encoder.downsample", lambda v: v >= 1, "an integer >= 1 (1: the full frame)"),
+    ("encoder.channels", lambda v: len(v) == 3 and all(c >= 1 for c in v), "3 channel counts >= 1"),
+    ("encoder.strides", lambda v: len(v) == 3 and all(c >= 1 for c in v), "3 strides >= 1"),
+    ("encoder.pools", lambda v: len(v) == 2 and all(c >= 1 for c in v), "2 max-pool sizes >= 1 (1: no pool)"),
     ("baseline.epsilon", lambda v: 0 <= v <= 1, "an exploration probability in [0, 1]"),
     ("baseline.gamma", lambda v: 0 <= v <= 1, "a discount in [0, 1]"),
     ("intrinsic.terms.icm.lr", lambda v: v > 0, "a learning rate > 0"),
@@ -104,6 +108,23 @@ RULES: list[Rule] = [
 ENCODER_OBS = {"conv": "pixels", "conv_blur": "pixels", "conv_with_random": "pixels", "mlp": "state"}
 MAX_TREE_LEAVES = 3**10
 CPU_ONLY_BASELINES = ("icm", "rnd")  # the Q agent's intrinsic rewards keep their networks on the CPU
+
+
+def _encoder_layout_errors(cfg: DictConfig) -> list[str]:
+    """A conv encoder's downsampling without a blur, and strides and pools that leave its frames no features."""
+    errors = []
+    downsample = OmegaConf.select(cfg, "encoder.downsample", default=1)
+    if downsample > 1 and OmegaConf.select(cfg, "encoder.blur_sigma", default=0.0) <= 0:
+        errors.append(f"encoder.downsample={downsample}: samples the blurred frame, and encoder={cfg.encoder.name} does "
+                      "not blur; allowed: encoder.downsample=1, or encoder.blur_sigma > 0 (encoder=conv_blur)")  # fmt: skip
+    strides, pools = OmegaConf.select(cfg, "encoder.strides"), OmegaConf.select(cfg, "encoder.pools")
+    if strides is not None and pools is not None and len(strides) == 3 and len(pools) == 2:
+        from curiosity.nets.encoders import conv_layout_error  # imports torch: only once the config is read
+
+        why = conv_layout_error(int(cfg.env.frame_size), int(downsample), list(strides), list(pools))
+        if why:
+            errors.append(why)
+    return errors
 
 
 def _cross_field_errors(cfg: DictConfig) -> list[str]:
@@ -137,6 +158,7 @@ def _cross_field_errors(cfg: DictConfig) -> list[str]:
     elif choice(cfg.agent.q_intrinsic) == "relabel" and cfg.planner.name != "qtree":
         errors.append(f"agent.q_intrinsic=relabel: rescored rewards feed Q targets, and planner={cfg.planner.name} has no "
                       "Q; allowed: agent.q_intrinsic=batch, or planner=qtree")  # fmt: skip
+    errors += _encoder_layout_errors(cfg)
     random_dim = OmegaConf.select(cfg, "encoder.random_dim", default=None)
     if random_dim is not None and not 1 <= random_dim < cfg.agent.internal_dim:
         errors.append(f"encoder.random_dim={random_dim}: must be >= 1 and < agent.internal_dim={cfg.agent.internal_dim} "
