@@ -5,7 +5,8 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
@@ -34,6 +35,22 @@ def compose_cfg(overrides: Sequence[str] = ()) -> DictConfig:
 @pytest.fixture
 def cfg_for() -> Callable[..., DictConfig]:
     return lambda *overrides: compose_cfg(overrides)
+
+
+@contextmanager
+def holding_lock(run_dir: Path) -> Iterator[int]:
+    """A live process that holds ``run_dir``'s run lock as a run does (the kernel's ``flock`` on ``run.lock``, its id
+    in the file) until the block ends; yields its id."""
+    hold = ("import fcntl, os, sys, time; fd = os.open(sys.argv[1], os.O_CREAT | os.O_RDWR); "
+            "fcntl.flock(fd, fcntl.LOCK_EX); os.write(fd, str(os.getpid()).encode()); print('held', flush=True); "
+            "time.sleep(300)")  # fmt: skip
+    with subprocess.Popen([sys.executable, "-c", hold, str(Path(run_dir) / "run.lock")], stdout=subprocess.PIPE,
+                          text=True) as other:  # fmt: skip
+        try:
+            assert other.stdout is not None and other.stdout.readline().strip() == "held"
+            yield other.pid
+        finally:
+            other.kill()
 
 
 def run_cli(args: Sequence[str], cwd: Path, timeout: float = 600) -> subprocess.CompletedProcess:

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import REPO
+from tests.conftest import REPO, holding_lock
 
 TUNING = REPO / "results" / "tuning"  # three finished seeds and one stopped at env step 1990 (no summary.json)
 
@@ -54,13 +54,9 @@ def test_collect_reads_a_run_whose_lock_a_live_process_holds_as_running(sweep: P
     """The stopped seed 3 with a lock held by a live process reads as running; with the lock's process gone, as
     stopped again (a stale lock)."""
     lock = next(p for p in sweep.rglob("seed=3") if not (p / "summary.json").exists()) / "run.lock"
-    with subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"]) as other:
-        try:
-            lock.write_text(f"{other.pid}\n")
-            res = analysis("collect", sweep)
-        finally:
-            other.kill()
-    assert any(line.startswith("running") and f"process {other.pid}, at env step 1990" in line
+    with holding_lock(lock.parent) as pid:
+        res = analysis("collect", sweep)
+    assert any(line.startswith("running") and f"process {pid}, at env step 1990" in line
                for line in res.stdout.splitlines())  # fmt: skip
     assert res.stdout.splitlines()[-1] == "6 run(s): 3 complete, 1 failed, 1 running, 1 stopped"
     assert analysis("collect", sweep).stdout.splitlines()[-1] == "6 run(s): 3 complete, 1 failed, 2 stopped"

@@ -3,13 +3,12 @@ what DEST holds is never changed or lost by a refused or repeated landing."""
 
 from __future__ import annotations
 
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
 from runners.land import KEPT, land, main, report
+from tests.conftest import holding_lock
 
 
 def make_run(root: Path, rel: str, config: str = "seed: 1\n", finished: bool = True, steps: int = 5) -> Path:
@@ -77,12 +76,8 @@ def test_a_stopped_copy_is_completed_and_unfinished_runs_land_when_asked(src: Pa
 
 
 def test_a_run_held_by_a_live_process_is_never_copied(src: Path, tmp_path: Path) -> None:
-    with subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"]) as other:
-        try:
-            (src / "mc/rnd/seed=101/run.lock").write_text(f"{other.pid}\n")
-            p = land(src, tmp_path / "dest", unfinished=True)
-        finally:
-            other.kill()
+    with holding_lock(src / "mc/rnd/seed=101"):
+        p = land(src, tmp_path / "dest", unfinished=True)
     assert p.running == [Path("mc/rnd/seed=101")] and p.unfinished == []
     assert not (tmp_path / "dest/mc/rnd/seed=101").exists()
     assert report(p, unfinished=True, dry_run=False).splitlines() == [

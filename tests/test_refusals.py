@@ -9,16 +9,13 @@ from __future__ import annotations
 
 import os
 import shutil
-import subprocess
-import sys
-from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
 
 from curiosity.config.validate import RULES
-from tests.conftest import run_cli
+from tests.conftest import holding_lock, run_cli
 
 BASE = ["budget=smoke", "env.renderer=fast"]
 
@@ -157,22 +154,16 @@ def _read_only_dir(tmp_path: Path) -> Path:
     pytest.skip("no read-only directory to aim at")
 
 
-@pytest.fixture
-def live_process() -> Iterator[int]:
-    sleeper = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(300)"])
-    yield sleeper.pid
-    sleeper.kill()
-    sleeper.wait()
-
-
 def _altered(finished: Path, tmp_path: Path, alter: str, request: pytest.FixtureRequest) -> Path:
     """A copy of the finished run, altered: locked by a live process, its checkpoints damaged or gone (and, for an
     unfinished run, its summary)."""
     run_dir = tmp_path / "altered"
     shutil.copytree(finished, run_dir)
     checkpoints = [run_dir / "checkpoint.pt", run_dir / "checkpoint.prev.pt"]
-    if alter == "lock":
-        (run_dir / "run.lock").write_text(str(request.getfixturevalue("live_process")))
+    if alter == "lock":  # a live process holds the run's lock until the test ends
+        held = holding_lock(run_dir)
+        held.__enter__()
+        request.addfinalizer(lambda: held.__exit__(None, None, None))
     for path in checkpoints:
         if alter == "truncated":
             path.write_bytes(path.read_bytes()[:1000])

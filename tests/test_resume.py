@@ -193,3 +193,52 @@ def test_a_signal_checkpoints_says_so_in_one_line_and_the_same_command_resumes(t
     res = run_cli([*ARGS, f"hydra.run.dir={out}"], cwd=tmp_path)
     assert res.returncode == 0 and "resuming" in res.stdout + res.stderr
     assert int(metrics_without_wall_clock(out)[-1][0]) == 120
+
+
+def _state(pid: int) -> str:
+    """The kernel's one-letter state of process ``pid`` (Z: a zombie, dead and not yet reaped)."""
+    return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads process states from /proc (Linux)")
+def test_a_run_killed_with_sigkill_resumes_before_its_process_is_reaped(tmp_path: Path) -> None:
+    # The killed child stays a zombie until this test reaps it; a zombie still answers kill(pid, 0), so a pid-file lock
+    # refused the resume ("being written by process N"). The kernel's lock died with the process: the resume starts.
+    out = tmp_path / "run"
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    cmd = [sys.executable, "-m", "runners.train", *ARGS, "progress=false", f"hydra.run.dir={out}"]
+    proc = subprocess.Popen(cmd, cwd=tmp_path, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.time() + 300
+        while proc.poll() is None and _rows(out / "metrics.csv") < 5 and time.time() < deadline:
+            time.sleep(0.02)
+        assert proc.poll() is None, "the run ended before it could be killed"
+        os.kill(proc.pid, signal.SIGKILL)  # not proc.kill(): Popen must not reap it
+        while _state(proc.pid) != "Z":
+            time.sleep(0.01)
+        assert (out / "run.lock").read_text() == str(proc.pid)  # the dead run's lock file is still there
+        res = run_cli([*ARGS, f"hydra.run.dir={out}"], cwd=tmp_path)
+        assert _state(proc.pid) == "Z"  # still not reaped while the resume ran
+    finally:
+        proc.wait()
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert "resuming" in res.stdout + res.stderr
+    assert (out / "summary.json").is_file() and not (out / "run.lock").exists()
+
+
+def test_a_live_run_s_directory_is_refused_in_one_line(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    cmd = [sys.executable, "-m", "runners.train", *ARGS, "progress=false", f"hydra.run.dir={out}"]
+    proc = subprocess.Popen(cmd, cwd=tmp_path, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.time() + 300
+        while proc.poll() is None and _rows(out / "metrics.csv") < 2 and time.time() < deadline:
+            time.sleep(0.02)
+        assert proc.poll() is None, "the run ended before the second command"
+        res = run_cli([*ARGS, f"hydra.run.dir={out}"], cwd=tmp_path)
+    finally:
+        proc.kill()
+        proc.wait()
+    assert res.returncode != 0
+    assert f"is being written by process {proc.pid}" in res.stderr and "Traceback" not in res.stderr

@@ -8,6 +8,7 @@ for analysis along the run (``python -m analysis.landscape RUN_DIR --step N``); 
 
 from __future__ import annotations
 
+import fcntl
 import logging
 import os
 import random
@@ -143,52 +144,77 @@ def load_checkpoint(run_dir: str | Path) -> dict[str, Any] | None:
                           "delete it) to start the run again from step 0, or another run directory")  # fmt: skip
 
 
-def _alive(pid: int) -> bool:
+def _held(path: Path) -> bool:
+    """Whether a process holds the kernel lock (``flock``) on the file at ``path``; False when there is no file."""
     try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
+        fd = os.open(path, os.O_RDONLY)
+    except OSError:
         return False
-    except PermissionError:
+    try:
+        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+    except BlockingIOError:
         return True
-    return True
+    finally:
+        os.close(fd)  # closing releases the shared lock this took
+    return False
 
 
 def lock_holder(run_dir: str | Path) -> int | None:
-    """The id of another live process that holds ``run_dir``'s lock, or None (no lock, or a stale one)."""
+    """The id of another process that holds ``run_dir``'s lock, or None (no lock, or a lock no live process holds).
+
+    The lock is the kernel's advisory lock (``flock``) on ``run.lock``, which the kernel releases when its process
+    dies (a process killed with SIGKILL and not yet reaped, a zombie, holds nothing); the file names the holder.
+    """
+    path = Path(run_dir) / LOCK
     try:
-        pid = int((Path(run_dir) / LOCK).read_text().strip() or 0)
+        pid = int(path.read_text().strip() or 0)
     except (OSError, ValueError):
+        pid = 0
+    if pid == os.getpid() or not _held(path):
         return None
-    return pid if pid and pid != os.getpid() and _alive(pid) else None
+    return pid or -1  # -1: held, by a process that has not written its id yet
 
 
 def locked_error(run_dir: str | Path, pid: int) -> RunDirectoryError:
-    """The refusal of a run directory that process ``pid`` is writing."""
-    return RunDirectoryError(f"{run_dir} is being written by process {pid} (its {LOCK}); two jobs never share a run "
+    """The refusal of a run directory that process ``pid`` (-1: a process not yet named in the file) is writing."""
+    who = f"process {pid}" if pid > 0 else "another process"
+    return RunDirectoryError(f"{run_dir} is being written by {who} (its {LOCK}); two jobs never share a run "
                              "directory; allowed: wait for it, or other overrides or another hydra.run.dir")  # fmt: skip
 
 
 class RunLock:
-    """Exclusive ownership of a run directory for one live process (a stale lock of a dead process is taken over)."""
+    """Exclusive ownership of a run directory for one live process: the kernel's advisory lock (``flock``) on
+    ``run.lock``, released by the kernel when the process ends however it ends, so a killed run's directory is free
+    at once; the file holds the owner's process id for the refusal's message."""
 
     def __init__(self, run_dir: str | Path) -> None:
         self.path = Path(run_dir) / LOCK
+        self.fd: int | None = None
 
     def __enter__(self) -> RunLock:
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        for _ in range(2):
+        for _ in range(10):
+            fd = os.open(self.path, os.O_CREAT | os.O_RDWR, 0o644)
             try:
-                fd = os.open(self.path, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
-            except FileExistsError:
-                pid = lock_holder(self.path.parent)
-                if pid is not None:
-                    raise locked_error(self.path.parent, pid) from None
-                self.path.unlink(missing_ok=True)
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                os.close(fd)
+                raise locked_error(self.path.parent, lock_holder(self.path.parent) or -1) from None
+            try:  # the file may have been unlinked by its last owner between our open and our lock: lock the current one
+                same = os.fstat(fd).st_ino == os.stat(self.path).st_ino
+            except FileNotFoundError:
+                same = False
+            if not same:
+                os.close(fd)
                 continue
-            with os.fdopen(fd, "w") as f:
-                f.write(str(os.getpid()))
+            os.ftruncate(fd, 0)
+            os.write(fd, str(os.getpid()).encode())
+            self.fd = fd
             return self
         raise RunDirectoryError(f"could not lock {self.path}")
 
     def __exit__(self, *exc: object) -> None:
-        self.path.unlink(missing_ok=True)
+        self.path.unlink(missing_ok=True)  # while still locked: a waiting opener sees another inode and retries
+        if self.fd is not None:
+            os.close(self.fd)  # releases the lock
+            self.fd = None
