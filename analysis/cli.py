@@ -1,7 +1,7 @@
 """The command line every analysis command shares: ``RUNS_DIR [--out DIR] [--group-by KEYS] [--pool LABEL=GLOB]``,
 and one clear error line (no traceback) for a missing directory, no runs or a malformed option. A results directory
-may hold ``analysis.yaml`` with the ``pool``, ``group_by``, ``reference`` and ``include`` its tables were made with
-(:mod:`analysis.settings`): the bare command then makes them again (an option on the command line wins)."""
+may hold ``analysis.yaml`` with the ``pool``, ``group_by``, ``reference``, ``include`` and ``labels`` its tables were
+made with (:mod:`analysis.settings`): the bare command then makes them again (an option on the command line wins)."""
 
 from __future__ import annotations
 
@@ -55,6 +55,17 @@ def _apply(args: argparse.Namespace, found: dict[str, object]) -> None:
         args.group_by = ",".join(str(v) for v in found["group_by"])  # type: ignore[union-attr]
     if hasattr(args, "reference") and args.reference is None and "reference" in found:
         args.reference = str(found["reference"])
+    if hasattr(args, "labels") and args.labels is None and "labels" in found:
+        if not isinstance(found["labels"], list):
+            raise ValueError(f"labels: {found['labels']!r} is not allowed; allowed: a list of SHORT=GLOB")
+        args.labels = [str(v) for v in found["labels"]]
+
+
+def label_option(p: argparse.ArgumentParser) -> None:
+    """``--label SHORT=GLOB`` (repeatable): a short name for the row matching GLOB in the cost table and the Pareto
+    figure (:mod:`analysis.cost`); ``args.labels`` is None when not given, so ``analysis.yaml``'s ``labels`` apply."""
+    p.add_argument("--label", dest="labels", action="append", default=None, metavar="SHORT=GLOB",
+                   help="short name for the row matching GLOB in the cost table and Pareto figure (repeatable)")  # fmt: skip
 
 
 def run(p: argparse.ArgumentParser, command: Callable[[Options], str]) -> None:

@@ -1,7 +1,8 @@
 """One Markdown report of a results directory: the steps-to-goal table and every figure, embedded.
 
-``python -m analysis.report RUNS_DIR [--out DIR] [--reference GLOB] [--group-by KEYS] [--pool LABEL=GLOB ...]`` writes
-the tables (``analysis.tables``) and figures (``analysis.figures``) to DIR (default ``RUNS_DIR/report``) and
+``python -m analysis.report RUNS_DIR [--out DIR] [--reference GLOB] [--group-by KEYS] [--pool LABEL=GLOB ...]
+[--label SHORT=GLOB ...]`` writes the tables (``analysis.tables``) and figures (``analysis.figures``; where runs record
+``cpu_seconds``, the cost table and Pareto figure too, ``analysis.cost``) to DIR (default ``RUNS_DIR/report``) and
 ``DIR/README.md``, which embeds them with links relative to DIR (GitHub shows it when DIR is browsed).
 """
 
@@ -9,7 +10,7 @@ from __future__ import annotations
 
 import shlex
 
-from analysis.cli import Options, parser, run
+from analysis.cli import Options, label_option, parser, run
 from analysis.figures import FIGURES, write_figures
 from analysis.tables import DEFAULT_REFERENCE, write_tables
 
@@ -24,6 +25,8 @@ CAPTIONS = {
     "behaviour": "Behaviour: the rate of directed actions and of repeated actions, where runs log them.",
     "tv_presses": "Noisy TV: the fraction of the agent's steps so far that pressed the TV's remote (a run's final "
                   "rate, the table's, carried on after it ended), mean and band; dotted: a random policy.",
+    "pareto": "Cost against sample efficiency: each row's median CPU seconds per seed and mean steps-to-goal, with 95 % "
+              "bootstrap CIs over seeds; the reference a black star, dotted 1.10 × its mean, dashed 1/5 of its CPU.",
 }  # fmt: skip
 
 
@@ -32,13 +35,15 @@ def _command(o: Options) -> str:
     args += [f"--group-by {','.join(o.group_by)}"] if o.group_by else []
     args += [f"--pool {shlex.quote(p)}" for p in o.pools]
     args += [f"--reference {shlex.quote(o.args.reference)}"] if o.args.reference not in (None, DEFAULT_REFERENCE) else []
+    args += [f"--label {shlex.quote(label)}" for label in o.args.labels or ()]
     return "python -m analysis.report " + " ".join(args)
 
 
 def write_report(o: Options) -> str:
     """Write the tables, the figures and ``README.md`` embedding them; returns the one-line result."""
-    write_tables(o.root, o.out, o.args.reference or DEFAULT_REFERENCE, o.group_by, o.pools)
+    write_tables(o.root, o.out, o.args.reference or DEFAULT_REFERENCE, o.group_by, o.pools, o.args.labels or ())
     written = {path.stem for path in write_figures(o.root, o.out, o.group_by, o.pools)}
+    written |= {"pareto"} if (o.out / "pareto.png").is_file() else set()  # the tables' cost step, where runs record CPU
     parts = [f"# Report: `{o.root}`", "",
              f"Written by `{_command(o)}` from the run directories' `summary.json`, `.hydra/config.yaml` and "
              "`metrics.csv`; re-running it rewrites these files byte for byte. Tables also as "
@@ -46,11 +51,11 @@ def write_report(o: Options) -> str:
              "[incomplete.csv](incomplete.csv).", "",
              "## Steps to goal", "", (o.out / "steps_to_goal.md").read_text().rstrip(), "",
              "## Stable intrinsic reward", "", (o.out / "stability.md").read_text().rstrip(), ""]  # fmt: skip
-    for name in ("spread", "stable_step", "distractor"):  # Figures 6 / 7 and the noisy TV, where runs log their columns
+    for name in ("spread", "stable_step", "distractor", "cost"):  # Figures 6 / 7, the noisy TV, CPU: where runs log them
         if (o.out / f"{name}.md").is_file():
             parts += ["#" + (o.out / f"{name}.md").read_text().rstrip(), ""]
     parts += ["## Figures", ""]
-    for name in (n for n in FIGURES if n in written):  # the TV figure only where runs have a TV
+    for name in (n for n in [*FIGURES, "pareto"] if n in written):  # the TV figure only where runs have a TV
         parts += [f"![{name}]({name}.png)", "", f"{CAPTIONS[name]} ([PDF]({name}.pdf))", ""]
     (o.out / "README.md").write_text("\n".join(parts))
     return f"report written to {o.out}/README.md"
@@ -60,6 +65,7 @@ def main() -> None:
     p = parser(__doc__.splitlines()[0])
     p.add_argument("--reference", default=None,
                    help=f"glob over row labels: the Welch test's reference row (default {DEFAULT_REFERENCE})")  # fmt: skip
+    label_option(p)
     run(p, write_report)
 
 

@@ -1,9 +1,10 @@
 """``RUNS_DIR/analysis.yaml``: how a results directory's committed tables are made, so that the bare command
 (``python -m analysis.tables RUNS_DIR``) makes them again.
 
-Keys: ``pool`` (a list of ``LABEL=GLOB``), ``group_by`` (a list of config keys), ``reference`` (a row glob) and
+Keys: ``pool`` (a list of ``LABEL=GLOB``), ``group_by`` (a list of config keys), ``reference`` (a row glob),
 ``include`` (a list of globs, relative to RUNS_DIR, of run directories another preset made with the same config:
-:mod:`analysis.include`).
+:mod:`analysis.include`) and ``labels`` (a list of ``SHORT=GLOB``: a short name for the row matching the glob, shown
+by the cost table and the Pareto figure, :mod:`analysis.cost`; the other tables keep the rows' own labels).
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from pathlib import Path
 import yaml
 
 SETTINGS = "analysis.yaml"  # in RUNS_DIR
-SETTING_KEYS = ("pool", "group_by", "reference", "include")
+SETTING_KEYS = ("pool", "group_by", "reference", "include", "labels")
 
 
 def settings(root: Path) -> dict[str, object]:

@@ -1,5 +1,7 @@
 """Statistics of one table row, all from ``scipy.stats``: mean ± standard error, median, IQM with a stratified-bootstrap
-95 % CI, and Welch's t-test against a reference row.
+95 % CI, and Welch's t-test against a reference row; a percentile-bootstrap CI of any statistic over seeds
+(:func:`bootstrap_ci`) and the paired bootstrap upper bound of a ratio of means (:func:`ratio_upper_bound`: the
+cheap-seed study's non-inferiority test, ``results/cheap_seed/README.md``).
 
 Every statistic is over the row's seeds with a censored run counted at its last step (the paper's Table 2 rule),
 except ``mean_success``/``se_success``, which use the seeds that reached the goal only. SE = sample SD (ddof = 1)/√n.
@@ -9,7 +11,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 from scipy import stats
@@ -62,3 +64,32 @@ def welch_p(x: Sequence[float], reference: Sequence[float]) -> float:
         warnings.filterwarnings("ignore", message="Precision loss occurred in moment calculation", category=RuntimeWarning)
         p = float(stats.ttest_ind(a, b, equal_var=False).pvalue)
     return p if not math.isnan(p) else NAN
+
+
+def bootstrap_ci(x: Sequence[float], statistic: Callable[..., np.ndarray], level: float = 0.95,
+                 seed: int = BOOTSTRAP_SEED) -> tuple[float, float]:  # fmt: skip
+    """Percentile-bootstrap CI of ``statistic`` (a vectorised numpy reduction taking ``axis``, e.g. ``np.median``) over
+    the values of ``x`` (seeds), ``BOOTSTRAP_RESAMPLES`` resamples with a fixed seed; NaN below 2 values."""
+    a = np.asarray(x, dtype=float)
+    if a.size < 2:
+        return NAN, NAN
+    res = stats.bootstrap((a,), statistic, n_resamples=BOOTSTRAP_RESAMPLES, confidence_level=level, method="percentile",
+                          vectorized=True, rng=np.random.default_rng(seed))  # fmt: skip
+    return float(res.confidence_interval.low), float(res.confidence_interval.high)
+
+
+def ratio_upper_bound(new: Sequence[float], ref: Sequence[float], level: float = 0.9, resamples: int = 10_000,
+                      seed: int = 0) -> tuple[float, float]:  # fmt: skip
+    """mean(new) / mean(ref) of paired values (``new[i]`` and ``ref[i]`` are one seed's two runs) and its one-sided
+    ``level`` paired-bootstrap upper bound: the seeds resampled with replacement ``resamples`` times
+    (``numpy.random.default_rng(seed).integers``, one (resamples, n) draw; a drawn seed brings both of its values), the
+    ratio of the two means recomputed on each resample, the bound being the ``level`` percentile of those ratios
+    (``numpy.percentile``, linear interpolation). Both NaN for no pair; raises ValueError for unequal lengths."""
+    a, b = np.asarray(new, dtype=float), np.asarray(ref, dtype=float)
+    if a.shape != b.shape or a.ndim != 1:
+        raise ValueError(f"ratio_upper_bound: paired 1-d arrays expected, got shapes {a.shape} and {b.shape}")
+    if a.size == 0:
+        return NAN, NAN
+    idx = np.random.default_rng(seed).integers(0, a.size, size=(resamples, a.size))
+    ratios = a[idx].mean(axis=1) / b[idx].mean(axis=1)
+    return float(a.mean() / b.mean()), float(np.percentile(ratios, 100 * level))

@@ -8,7 +8,9 @@ a stratified-bootstrap 95 % CI, Welch's t-test p against the reference row, and 
 (``analysis/paper_numbers.yaml``); below it the compute the runs took and the code commits that made them, naming
 every row that pools runs of more than one. Runs without ``summary.json`` are listed apart, never dropped silently.
 Where runs have a noisy TV, ``distractor.{md,csv}`` set each method with the TV beside itself without
-(``analysis.distractor``).
+(``analysis.distractor``). Where runs record ``cpu_seconds``, ``cost.{md,csv}`` set each row's CPU per seed beside its
+steps-to-goal and its non-inferiority against the reference row, and ``pareto.{png,pdf,csv}`` plot the one against the
+other (``analysis.cost``, ``analysis.pareto``; ``--label SHORT=GLOB`` names their rows).
 """
 
 from __future__ import annotations
@@ -24,8 +26,9 @@ import pandas as pd
 import yaml
 
 from analysis import claims
-from analysis.cli import Options, parser, run
+from analysis.cli import Options, label_option, parser, run
 from analysis.collect import load_incomplete
+from analysis.cost import parse_labels, write_cost
 from analysis.rows import label_rows, load_runs, pool_rows
 from analysis.stats import iqm_ci, mean_se, welch_p
 
@@ -195,8 +198,10 @@ def _relative(df: pd.DataFrame, root: Path) -> pd.DataFrame:
 
 
 def write_tables(root: Path, out: Path, reference: str = DEFAULT_REFERENCE, group_by: Sequence[str] = (),
-                 pools: Sequence[str] = ()) -> pd.DataFrame:  # fmt: skip
-    """Write ``steps_to_goal.{md,tex,csv}`` and ``incomplete.csv`` for the runs below ``root``; returns the table."""
+                 pools: Sequence[str] = (), labels: Sequence[str] = ()) -> pd.DataFrame:  # fmt: skip
+    """Write ``steps_to_goal.{md,tex,csv}`` and ``incomplete.csv`` for the runs below ``root`` (and the cost table and
+    figure where runs record ``cpu_seconds``, their rows named by ``labels``); returns the steps table."""
+    parse_labels(labels)  # a malformed label fails before any file is written
     runs = load_runs(root)
     incomplete = _relative(load_incomplete(root), root)
     if runs.empty and incomplete.empty:
@@ -215,6 +220,7 @@ def write_tables(root: Path, out: Path, reference: str = DEFAULT_REFERENCE, grou
         from analysis.distractor import write_distractor_table  # it imports this module's per-seed text
 
         write_distractor_table(runs, out)
+        write_cost(rows, out, reference, labels, incomplete)
     return table
 
 
@@ -237,9 +243,10 @@ def main() -> None:
     p = parser(__doc__.splitlines()[0])
     p.add_argument("--reference", default=None,
                    help=f"glob over row labels: the Welch test's reference row (default {DEFAULT_REFERENCE})")  # fmt: skip
+    label_option(p)
 
     def command(o: Options) -> str:
-        table = write_tables(o.root, o.out, o.args.reference or DEFAULT_REFERENCE, o.group_by, o.pools)
+        table = write_tables(o.root, o.out, o.args.reference or DEFAULT_REFERENCE, o.group_by, o.pools, o.args.labels or ())
         return f"{len(table)} row(s) written to {o.out}/steps_to_goal.{{md,tex,csv}}"
 
     run(p, command)

@@ -42,10 +42,11 @@ def _metrics(seed: int, last: int, estimator: str, behaviour: bool, tv_rate: flo
 
 def make_run(root: Path, env: str, method: str, seed: int, steps: int | None, cap: int = 3000, *, entropy: str = "none",
              estimator: str = "kde", horizon: int = 3, status: str = "complete", behaviour: bool = True,
-             distractor: str = "none", tv_rate: float | None = None) -> Path:  # fmt: skip
+             distractor: str = "none", tv_rate: float | None = None, cpu_seconds: float | None = None) -> Path:  # fmt: skip
     """One run directory under ``root/<env>/<method>/h<horizon>/seed=<seed>``: ``steps`` is its steps-to-goal (None: it
     hit ``cap``); ``status`` ``failed`` writes FAILED.json and ``stopped`` nothing more (both: no summary.json). With
-    ``distractor`` (under ``<distractor>/`` then), ``tv_rate`` is the TV-press rate its summary and metrics report."""
+    ``distractor`` (under ``<distractor>/`` then), ``tv_rate`` is the TV-press rate its summary and metrics report.
+    ``cpu_seconds``, where given, is the CPU time its summary records (a run made before the field existed has none)."""
     d = root / env / method / f"h{horizon}" / (distractor if distractor != "none" else "") / f"seed={seed}"
     (d / ".hydra").mkdir(parents=True)
     config = _config(env, method, seed, entropy, estimator, horizon, distractor)
@@ -60,6 +61,8 @@ def make_run(root: Path, env: str, method: str, seed: int, steps: int | None, ca
         summary = {"method": method, "seed": seed, "env": env, "steps_to_goal": steps, "reached_goal": steps is not None,
                    "env_steps": last, "max_steps": cap, "wall_seconds": 1.0,
                    "behaviour": {"tv_rate": tv_rate} if tv_rate is not None else None}  # fmt: skip
+        if cpu_seconds is not None:
+            summary["cpu_seconds"] = cpu_seconds
         (d / "summary.json").write_text(json.dumps(summary))
     return d
 
