@@ -3,7 +3,8 @@
 Long sweeps run from a separate clone or worktree of a fixed commit (so that edits do not change running jobs), into
 that clone's ``results/<preset>``. This copies the finished runs below SRC into DEST (the repository's
 ``results/<preset>``) at the same relative paths, with only the files results keep (:data:`KEPT`: ``.hydra/``,
-``metrics.csv``, ``summary.json``, ``train.log``, TensorBoard's ``tb/``), never checkpoints, locks or temporary files.
+``metrics.csv``, ``summary.json``, ``train.log``), never TensorBoard's ``tb/`` (its scalars are ``metrics.csv``'s),
+checkpoints, locks or temporary files.
 A finished run is one whose directory holds ``summary.json``.
 
 Per run, DEST may hold: nothing (the run is copied); the same finished run (the same ``summary.json`` and
@@ -33,7 +34,7 @@ from pathlib import Path
 from analysis.collect import all_run_dirs, last_step
 from curiosity.runtime.checkpoint import lock_holder
 
-KEPT = (".hydra", "metrics.csv", "summary.json", "train.log", "tb")
+KEPT = (".hydra", "metrics.csv", "summary.json", "train.log")
 SAME_RUN = ("summary.json", "metrics.csv")  # equal bytes: the run DEST holds is this one
 
 

@@ -48,7 +48,8 @@ def test_finished_runs_land_with_only_the_kept_files(src: Path, tmp_path: Path) 
     p = land(src, dest)
     assert p.copy == [Path("mc/rnd/seed=100")] and p.unfinished == [Path("mc/rnd/seed=101")]
     run = dest / "mc/rnd/seed=100"
-    assert sorted(c.name for c in run.iterdir()) == sorted(KEPT)  # no checkpoint, lock or kept checkpoints
+    assert sorted(c.name for c in run.iterdir()) == sorted(KEPT)  # no events, checkpoint, lock or kept checkpoints
+    assert "tb" not in KEPT  # TensorBoard's events repeat metrics.csv: results/ never holds them
     assert snapshot(run) == {k: v for k, v in snapshot(src / "mc/rnd/seed=100").items() if k.split("/")[0] in KEPT}
     assert not (dest / "mc/rnd/seed=101").exists()  # unfinished: left in SRC
     assert not (dest / "multirun.yaml").exists()  # a preset's launches each rewrite it; every run has its .hydra/
