@@ -17,6 +17,7 @@ import pandas as pd
 import yaml
 from omegaconf import OmegaConf
 
+from analysis.include import included_runs
 from curiosity.runtime.checkpoint import lock_holder
 
 GROUPS = ("env", "encoder", "entropy", "estimator", "backward", "baseline", "planner", "budget")
@@ -27,8 +28,6 @@ RUN_MARKERS = ("summary.json", "metrics.csv", "FAILED.json", ".hydra/config.yaml
 def run_dirs(root: str | Path) -> list[Path]:
     """Every finished run directory below ``root`` (a directory holding ``summary.json``), sorted, then the finished
     runs of other directories that ``root/analysis.yaml`` includes (:mod:`analysis.include`), sorted."""
-    from analysis.include import included_runs  # it reads configs through analysis.rows, which imports this module
-
     local = sorted(p.parent for p in Path(root).rglob("summary.json"))
     return local + included_runs(root, local)
 

@@ -32,7 +32,7 @@ import numpy as np
 import pandas as pd
 
 from analysis.claims import fmt
-from analysis.rows import IGNORED, flat_config
+from analysis.runconfig import IGNORED, flat_config
 from analysis.stats import iqm_ci, mean_se, ratio_upper_bound
 
 MARGIN = 1.10  # README rule 2: not worse when the bound of mean(point) / mean(today) is at most this
@@ -245,8 +245,8 @@ def to_markdown(table: pd.DataFrame, runs: pd.DataFrame, reference: str) -> str:
 
 def write_cost(runs: pd.DataFrame, out: Path, reference: str, labels: Sequence[str] = (),
                incomplete: pd.DataFrame | None = None) -> bool:  # fmt: skip
-    """``cost.{md,csv}`` and ``pareto.{png,pdf,csv}`` into ``out`` for labelled runs (``analysis.rows``) when some run
-    records ``cpu_seconds``; returns whether they were written."""
+    """``cost.{md,csv}`` into ``out`` for labelled runs (``analysis.rows``) when some run records ``cpu_seconds``;
+    returns whether they were written (``analysis.pareto`` then draws the same rows)."""
     runs = with_extras(runs)
     if not has_cost(runs):
         return False
@@ -256,7 +256,4 @@ def write_cost(runs: pd.DataFrame, out: Path, reference: str, labels: Sequence[s
     out.mkdir(parents=True, exist_ok=True)
     (out / "cost.md").write_text(to_markdown(table, runs, reference))
     table.to_csv(out / "cost.csv", index=False, float_format="%.6g", lineterminator="\n")
-    from analysis.pareto import write_pareto  # matplotlib only once the table is written
-
-    write_pareto(runs, out, reference, short)
     return True

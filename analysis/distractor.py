@@ -17,8 +17,7 @@ import numpy as np
 import pandas as pd
 
 from analysis.claims import fmt
-from analysis.stats import mean_se, welch_p
-from analysis.tables import per_seed_text
+from analysis.stats import mean_se, per_seed_text, welch_p
 
 NONE = "none"
 NOTE = ("Steps-to-goal, lower is better; censored runs (`>cap`) counted at their last step; SE = sample SD (ddof = 1)"

@@ -46,7 +46,7 @@ from scipy.stats import spearmanr
 from analysis.cli import comma_ints
 from analysis.representation import agent_with_data, random_policy, rollout
 from curiosity.config import ConfigError
-from curiosity.config.build import build
+from curiosity.build import build
 from curiosity.envs import adapter_of, make_env
 from curiosity.runtime.preflight import checked_config
 from curiosity.runtime.restore import RestoreError, restore_run

@@ -15,6 +15,7 @@ import json
 import os
 from pathlib import Path
 
+from analysis.runconfig import IGNORED, flat_config
 from analysis.settings import SETTINGS, settings
 
 
@@ -29,8 +30,6 @@ def _patterns(root: Path) -> list[str]:
 def _identity(run_dir: Path) -> tuple[object, ...]:
     """(seed, the run's resolved config without the bookkeeping keys): two runs with the same identity are the same
     experiment."""
-    from analysis.rows import IGNORED, flat_config  # analysis.rows reads run directories through analysis.collect
-
     config = flat_config(run_dir)
     seed = json.loads((run_dir / "summary.json").read_text())["seed"]
     return (int(seed), *sorted((k, repr(v)) for k, v in config.items() if k not in IGNORED))

@@ -26,6 +26,7 @@ from analysis.cli import Options, label_option, parser, run
 from analysis.cost import CHEAPER, MARGIN, has_cost, reference_rows, short_labels, with_extras
 from analysis.plotting import panels, save
 from analysis.rows import label_rows, load_runs, pool_rows
+from analysis.settings import DEFAULT_REFERENCE
 from analysis.stats import bootstrap_ci
 
 # Okabe & Ito's colour-blind-safe palette without its black (the reference's colour), and a marker per row as well
@@ -116,9 +117,13 @@ def plot_pareto(points: pd.DataFrame, out: Path) -> list[Path]:
     return save(fig, out, "pareto")
 
 
-def write_pareto(runs: pd.DataFrame, out: Path, reference: str, labels: dict[tuple[str, str], str]) -> list[Path]:
-    """``pareto.{png,pdf,csv}`` into ``out`` for :func:`analysis.cost.with_extras`' runs; returns the files written."""
-    points = pareto_points(runs, reference, labels)
+def write_pareto(runs: pd.DataFrame, out: Path, reference: str, labels: Sequence[str] = ()) -> list[Path]:
+    """``pareto.{png,pdf,csv}`` into ``out`` for labelled runs (``analysis.rows``), their rows named by ``labels``
+    (``SHORT=GLOB``); returns the files written, none when no run records ``cpu_seconds``."""
+    runs = with_extras(runs)
+    if not has_cost(runs):
+        return []
+    points = pareto_points(runs, reference, short_labels(runs, labels))
     paths = plot_pareto(points, out)
     points.to_csv(out / "pareto.csv", index=False, float_format="%.6g", lineterminator="\n")
     return [*paths, out / "pareto.csv"]
@@ -130,16 +135,14 @@ def pareto_from_dirs(root: Path, out: Path, reference: str, labels: Sequence[str
     runs = load_runs(root)
     if runs.empty:
         raise FileNotFoundError(f"no finished run (with summary.json) below {root}")
-    runs = with_extras(pool_rows(label_rows(runs, group_by), pools))
-    if not has_cost(runs):
+    runs = pool_rows(label_rows(runs, group_by), pools)
+    if not has_cost(with_extras(runs)):
         raise ValueError(f"no finished run below {root} records cpu_seconds (summary.json): no cost to plot")
     out.mkdir(parents=True, exist_ok=True)
-    return write_pareto(runs, out, reference, short_labels(runs, labels))
+    return write_pareto(runs, out, reference, labels)
 
 
 def main() -> None:
-    from analysis.tables import DEFAULT_REFERENCE
-
     p = parser(__doc__.splitlines()[0])
     p.add_argument("--reference", default=None, help=f"glob over row labels: the reference row (default {DEFAULT_REFERENCE})")
     label_option(p)

@@ -12,7 +12,8 @@ import shlex
 
 from analysis.cli import Options, label_option, parser, run
 from analysis.figures import FIGURES, write_figures
-from analysis.tables import DEFAULT_REFERENCE, write_tables
+from analysis.settings import DEFAULT_REFERENCE
+from analysis.tables import write_tables
 
 CAPTIONS = {
     "steps_to_goal": "Steps-to-goal: every seed a point, censored seeds as red crosses at their cap, median | and IQM ◆.",

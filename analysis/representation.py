@@ -37,7 +37,7 @@ from scipy.stats import spearmanr
 from analysis.cli import comma_ints
 from curiosity.agents.paper import PaperAgent
 from curiosity.config import ConfigError
-from curiosity.config.build import build, choice
+from curiosity.build import build, choice
 from curiosity.envs import adapter_of, make_env
 from curiosity.runtime.preflight import checked_config
 

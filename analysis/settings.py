@@ -14,6 +14,7 @@ from pathlib import Path
 import yaml
 
 SETTINGS = "analysis.yaml"  # in RUNS_DIR
+DEFAULT_REFERENCE = "nsrs*"  # the reference row of a directory whose analysis.yaml names none
 SETTING_KEYS = ("pool", "group_by", "reference", "include", "labels")
 
 

@@ -14,6 +14,7 @@ import warnings
 from collections.abc import Callable, Sequence
 
 import numpy as np
+import pandas as pd
 from scipy import stats
 
 BOOTSTRAP_SEED = 0  # fixed: the tables are byte-for-byte the same on every re-run
@@ -93,3 +94,8 @@ def ratio_upper_bound(new: Sequence[float], ref: Sequence[float], level: float =
     idx = np.random.default_rng(seed).integers(0, a.size, size=(resamples, a.size))
     ratios = a[idx].mean(axis=1) / b[idx].mean(axis=1)
     return float(a.mean() / b.mean()), float(np.percentile(ratios, 100 * level))
+
+
+def per_seed_text(g: pd.DataFrame) -> str:
+    """Every run's steps-to-goal in ``g``'s order, a censored run as ``>last``."""
+    return " ".join(f">{int(s)}" if c else str(int(s)) for s, c in zip(g["steps"], g["censored"], strict=True))

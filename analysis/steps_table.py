@@ -18,7 +18,8 @@ from pathlib import Path
 import pandas as pd
 
 from analysis.collect import existing_roots, load_incomplete, load_summaries
-from analysis.rows import code_commit, distinguishing_keys, flat_config
+from analysis.rows import code_commit, distinguishing_keys
+from analysis.runconfig import flat_config
 
 BY = ("env", "method", "variant")
 

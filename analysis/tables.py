@@ -29,11 +29,14 @@ from analysis import claims
 from analysis.cli import Options, label_option, parser, run
 from analysis.collect import load_incomplete
 from analysis.cost import parse_labels, write_cost
+from analysis.distractor import write_distractor_table
+from analysis.figures import load
+from analysis.pareto import write_pareto
 from analysis.rows import label_rows, load_runs, pool_rows
-from analysis.stats import iqm_ci, mean_se, welch_p
+from analysis.settings import DEFAULT_REFERENCE
+from analysis.stats import iqm_ci, mean_se, per_seed_text, welch_p
 
 PAPER_NUMBERS = Path(__file__).with_name("paper_numbers.yaml")
-DEFAULT_REFERENCE = "nsrs*"
 NOTE = ("Steps-to-goal, lower is better. mean ± SE: censored runs (goal not reached, shown `>cap`) counted at their "
         "last step (the paper's Table 2 rule); SE = sample SD (ddof = 1)/√n. success mean: the seeds that reached the "
         "goal only. IQM: mean of the middle 50 % (scipy trim_mean 0.25), 95 % percentile-bootstrap CI over seeds "
@@ -45,11 +48,6 @@ NOTE = ("Steps-to-goal, lower is better. mean ± SE: censored runs (goal not rea
 def paper_numbers(path: Path = PAPER_NUMBERS) -> list[dict]:
     """The published rows: env, method, mean, se, seeds, source, rows (a glob, or a list of globs, over our row labels)."""
     return list(yaml.safe_load(path.read_text()))
-
-
-def per_seed_text(g: pd.DataFrame) -> str:
-    """Every run's steps-to-goal in ``g``'s order, a censored run as ``>last``."""
-    return " ".join(f">{int(s)}" if c else str(int(s)) for s, c in zip(g["steps"], g["censored"], strict=True))
 
 
 def _paper(env: str, labels: Sequence[str], numbers: Sequence[dict]) -> dict[str, object]:
@@ -217,17 +215,14 @@ def write_tables(root: Path, out: Path, reference: str = DEFAULT_REFERENCE, grou
     incomplete.reindex(columns=cols).to_csv(out / "incomplete.csv", index=False, lineterminator="\n")
     if not runs.empty:
         write_curve_tables(root, out, reference, group_by, pools)
-        from analysis.distractor import write_distractor_table  # it imports this module's per-seed text
-
         write_distractor_table(runs, out)
-        write_cost(rows, out, reference, labels, incomplete)
+        if write_cost(rows, out, reference, labels, incomplete):
+            write_pareto(rows, out, reference, labels)
     return table
 
 
 def write_curve_tables(root: Path, out: Path, reference: str, group_by: Sequence[str], pools: Sequence[str]) -> None:
     """``spread.{md,csv}`` (Figure 6) and ``stable_step.{md,csv}`` (Figure 7) for the runs that log their columns."""
-    from analysis.figures import load  # the metrics of every run: only once the steps table is written
-
     _, metrics = load(root, list(group_by), list(pools))
     for name, table, title, note in (
         ("spread", claims.spread_table(metrics, reference), "Spread of the next latents (Figure 6)", claims.SPREAD_NOTE),

@@ -11,7 +11,7 @@ import pytest
 import torch
 
 from curiosity.agents.paper import PaperAgent, build_world_model
-from curiosity.agents.world_model import WorldModel
+from curiosity.nets.world_model import WorldModel
 from curiosity.config import build
 from curiosity.intrinsic.base import IntrinsicContext
 from curiosity.intrinsic.latent_novelty import LatentNovelty

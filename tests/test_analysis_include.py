@@ -76,7 +76,7 @@ def test_the_committed_presets_include_only_runs_of_the_same_config(tmp_path: Pa
     keys aside) of the preset's job on its seed."""
     from omegaconf import OmegaConf
 
-    from analysis.rows import IGNORED, flat_config
+    from analysis.runconfig import IGNORED, flat_config
     from analysis.settings import settings
     from curiosity.config.compose import compose_config
 
@@ -113,7 +113,7 @@ def test_the_committed_presets_include_only_runs_of_the_same_config(tmp_path: Pa
 def test_flat_config_is_read_once_and_again_when_the_file_changes(tmp_path: Path) -> None:
     """The analysis reads every run's config several times per command: ``flat_config`` keeps what it read per file
     version, and a rewritten ``.hydra/config.yaml`` (an edited or re-run directory) is read again."""
-    from analysis.rows import flat_config
+    from analysis.runconfig import flat_config
     from tests.synthetic_runs import make_runs
 
     root = make_runs(tmp_path / "runs")

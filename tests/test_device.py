@@ -9,7 +9,7 @@ import torch
 
 from curiosity.config import ConfigError, build, validate
 from curiosity.envs import make_env
-from curiosity.runtime.device import resolve_device, to_device
+from curiosity.device import resolve_device, to_device
 from tests.conftest import compose_cfg
 
 SMALL = [

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import abc
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -18,6 +18,9 @@ class Agent(abc.ABC):
 
     metric_keys: tuple[str, ...] = ()
     label: str = "agent"
+    # what config validation asks of an agent class (curiosity/config/validate.py, from the baseline's _target_):
+    imagines: ClassVar[bool] = False  # plans over imagined latent steps, so some intrinsic term must score them
+    model_free_intrinsic: ClassVar[bool] = False  # learns from intrinsic rewards without a latent world model
 
     @abc.abstractmethod
     def act(self, obs: np.ndarray, step: int) -> int:

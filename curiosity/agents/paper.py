@@ -27,8 +27,8 @@ from curiosity.agents.representation import (
 )
 from curiosity.agents.schedule import TrainSchedule
 from curiosity.agents.updates import Q_GRAD_CLAMP, build_optimizers, load_optimizers_state, optimizers_state, step
-from curiosity.agents.world_model import WorldModel
-from curiosity.config.build import build, choice
+from curiosity.nets.world_model import WorldModel
+from curiosity.build import build, choice
 from curiosity.envs.simulator import Simulator, SimStates
 from curiosity.intrinsic.base import IntrinsicContext
 from curiosity.intrinsic.latent_novelty import LatentNovelty
@@ -42,7 +42,7 @@ from curiosity.planning.probe import probe_keys, probe_model
 from curiosity.planning.protocols import Plan, Planner, PlanRequest
 from curiosity.planning.rollout import SimulatorRollout
 from curiosity.replay import ReplayBuffer
-from curiosity.runtime.device import resolve_device, to_device
+from curiosity.device import resolve_device, to_device
 from curiosity.types import SegmentBatch, TransitionBatch
 
 AGENT_KEYS = ("intrinsic/reward", "losses/q", "train/iterations", "planner/score", "planner/entropy",
@@ -80,6 +80,8 @@ def build_world_model(cfg: DictConfig) -> WorldModel:
 
 class PaperAgent(Agent):
     """IB latent world model + hybrid latent curiosity + MPC (or Q-tree) planning, trained on a schedule."""
+
+    imagines = True
 
     def __init__(self, cfg: DictConfig) -> None:
         self.cfg, self.label = cfg, str(cfg.method_label)

@@ -20,7 +20,7 @@ from curiosity.agents.paper import obs_shape_of
 from curiosity.agents.q_learning import QLearner
 from curiosity.agents.representation import check_finite
 from curiosity.agents.schedule import TrainSchedule
-from curiosity.config.build import build, choice
+from curiosity.build import build, choice
 from curiosity.intrinsic.base import IntrinsicContext
 from curiosity.intrinsic.mixture import Mixture
 from curiosity.replay import ReplayBuffer
@@ -38,6 +38,8 @@ class IntrinsicQAgent(Agent):
         epsilon: probability of a uniformly random action after the warm-up.
         gamma: discount of the Q-learning.
     """
+
+    model_free_intrinsic = True
 
     def __init__(self, cfg: DictConfig, epsilon: float = 0.0, gamma: float = 0.8) -> None:
         self.cfg, self.label = cfg, str(cfg.method_label)

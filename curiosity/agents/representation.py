@@ -9,7 +9,7 @@ from functools import partial
 import torch
 from torch import Tensor
 
-from curiosity.agents.world_model import WorldModel
+from curiosity.nets.world_model import WorldModel
 from curiosity.errors import NumericalFault
 from curiosity.info.backward import backward_predictor_nll
 from curiosity.info.yardstick import latent_logdet

@@ -18,7 +18,7 @@ from typing import Any
 import torch
 from torch import Tensor, nn
 
-from curiosity.config.build import build
+from curiosity.build import build
 
 Q_GRAD_CLAMP = 1.0  # NSRS clamps the Q step's gradients elementwise to [-1, 1]
 

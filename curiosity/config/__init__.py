@@ -1,6 +1,6 @@
 """Configuration: typed schemas (registered with Hydra's ConfigStore), validation, seed ranges, object building."""
 
-from curiosity.config.build import build, choice
+from curiosity.build import build, choice
 from curiosity.config.resolvers import register_resolvers
 from curiosity.config.schema import register_schemas
 from curiosity.config.validate import ConfigError, sampled_candidates, validate

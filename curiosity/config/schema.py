@@ -3,7 +3,7 @@
 Each group option's YAML (``conf/<group>/<option>.yaml``) starts from its schema here through
 ``defaults: [/schema/<group>/<option>@_here_, _self_]``, so an unknown key or a value of the wrong type fails while
 Hydra composes the config, before anything runs. Group options that build an object name it with ``_target_``;
-``name`` (and ``label``) are metadata that :func:`curiosity.config.build` drops before instantiation.
+``name`` (and ``label``) are metadata that :func:`curiosity.build` drops before instantiation.
 """
 
 from __future__ import annotations

@@ -7,7 +7,7 @@ from typing import Any
 
 from omegaconf import DictConfig, OmegaConf
 
-from curiosity.config.build import choice
+from curiosity.build import choice
 from curiosity.errors import RunError
 
 
@@ -141,7 +141,7 @@ def _cross_field_errors(cfg: DictConfig) -> list[str]:
     ensemble = cfg.agent.transition_ensemble
     if imagined is not None and choice(imagined) == "ensemble" and ensemble < 2:
         errors.append(f"intrinsic.terms.pe.imagined=ensemble: needs agent.transition_ensemble >= 2, got {ensemble}")
-    from curiosity.runtime.device import device_error, resolve_device  # imports torch: only once the config is read
+    from curiosity.device import device_error, resolve_device  # imports torch: only once the config is read
 
     device = choice(cfg.device) if "device" in cfg else "cpu"
     why = device_error(device)
@@ -176,23 +176,19 @@ def _intrinsic_errors(cfg: DictConfig) -> list[str]:
     the Q agent has no latent world model for the prediction-error term. Checked from the terms' classes."""
     from hydra.utils import get_class, get_method  # imports the agents (torch): only once the config is read
 
-    from curiosity.agents.paper import PaperAgent
-    from curiosity.agents.q_agent import IntrinsicQAgent
-    from curiosity.intrinsic.base import IntrinsicReward
-
     terms = OmegaConf.to_container(cfg.intrinsic.terms, resolve=True, enum_to_str=True)
     assert isinstance(terms, dict)
-    classes: dict[str, type[IntrinsicReward]] = {}
+    classes: dict[str, type] = {}  # each term's class (curiosity.intrinsic.base.IntrinsicReward)
     for name, node in terms.items():
         target = get_method(node["_target_"])
         classes[name] = getattr(target, "__self__", target)  # a classmethod factory (from_context) or the class
     agent = get_class(str(cfg.baseline._target_))
     label = f"intrinsic={cfg.intrinsic.name}"
-    if issubclass(agent, PaperAgent) and not any(c.can_imagine(terms[n]) for n, c in classes.items()):
+    if getattr(agent, "imagines", False) and not any(c.can_imagine(terms[n]) for n, c in classes.items()):
         return [f"{label}: no term scores the planner's imagined latent steps; allowed: a term that does (novelty; pe "
                 "with intrinsic.terms.pe.imagined=dropout or ensemble; icm, rnd or re3 with "
                 "intrinsic.terms.<name>.input=latent)"]  # fmt: skip
-    if issubclass(agent, IntrinsicQAgent) and (model := [n for n, c in classes.items() if c.needs_model]):
+    if getattr(agent, "model_free_intrinsic", False) and (model := [n for n, c in classes.items() if c.needs_model]):
         return [f"{label}: the {', '.join(model)} term needs the paper agent's latent world model, which "
                 f"baseline={cfg.baseline.name} has not; allowed: intrinsic=novelty, icm or rnd"]  # fmt: skip
     return []

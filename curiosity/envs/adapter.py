@@ -84,7 +84,7 @@ def _spaces(env_id: str) -> tuple[int, tuple[int, ...]]:
 def env_actions(env_id: str, distractor: str = "none") -> int:
     """``${env_actions:<id>,<distractor>}``: the number of discrete actions of gymnasium env ``env_id``, plus the
     actions its distractor adds (the noisy TV's remote control: one)."""
-    from curiosity.config.build import choice
+    from curiosity.build import choice
     from curiosity.envs.distractor import extra_actions
 
     return _spaces(str(env_id))[0] + extra_actions(choice(distractor))

@@ -17,7 +17,7 @@ from gymnasium.wrappers import (
 )
 from hydra.utils import instantiate
 
-from curiosity.config.build import choice
+from curiosity.build import choice
 from curiosity.envs.adapter import adapter_of
 from curiosity.envs.distractor import REMOTE, NoisyTV
 from curiosity.envs.wrappers import FastRenderObservation, NormalisePixels

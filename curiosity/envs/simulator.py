@@ -19,7 +19,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from curiosity.config.build import choice
+from curiosity.build import choice
 from curiosity.envs.adapter import adapter_of
 from curiosity.envs.distractor import find_tv
 from curiosity.envs.make import make_single_obs_env, observe_state

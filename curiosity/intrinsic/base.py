@@ -19,7 +19,7 @@ from torch import Tensor
 from curiosity.types import TransitionBatch
 
 if TYPE_CHECKING:
-    from curiosity.agents.world_model import WorldModel
+    from curiosity.nets.world_model import WorldModel
     from curiosity.replay import ReplayBuffer
 
 

@@ -12,7 +12,7 @@ from typing import Any
 import torch
 from torch import Tensor
 
-from curiosity.config.build import build
+from curiosity.build import build
 from curiosity.intrinsic.base import IntrinsicContext, IntrinsicReward
 from curiosity.types import TransitionBatch
 

@@ -9,7 +9,7 @@ import numpy as np
 import torch
 from omegaconf import OmegaConf
 from analysis import representation as R
-from curiosity.config.build import build
+from curiosity.build import build
 
 
 def score(cfg, bw, memory, queries, warmup):
