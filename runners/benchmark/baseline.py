@@ -10,12 +10,14 @@ alternately, so a change of machine load hits both; the speed-up is the ratio of
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import statistics
 import subprocess
 import sys
 import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 
 from curiosity.runtime.allocator import MMAP_THRESHOLD
@@ -75,22 +77,34 @@ def _iteration_ms(tree: Path, batch: int, repeats: int, threads: int, extra_env:
     return float(json.loads(done.stdout.strip().splitlines()[-1]))
 
 
+@contextlib.contextmanager
+def worktree(commit: str, name: str = "baseline") -> Iterator[Path]:
+    """A temporary ``git worktree`` of ``commit`` (detached), removed on exit; its directory is named
+    ``<name>-<pid>`` (git names the worktree after it: unique per process). A commit git does not know raises
+    ``ValueError`` with git's one line."""
+    with tempfile.TemporaryDirectory() as tmp:
+        tree = Path(tmp) / f"{name}-{os.getpid()}"
+        done = subprocess.run(["git", "worktree", "add", "--detach", str(tree), commit], cwd=REPO, check=False,
+                              capture_output=True, text=True)  # fmt: skip
+        if done.returncode:
+            last = (done.stderr.strip().splitlines() or ["git worktree add failed"])[-1]
+            raise ValueError(f"commit {commit!r}: {last}")
+        try:
+            yield tree
+        finally:
+            subprocess.run(["git", "worktree", "remove", "--force", str(tree)], cwd=REPO, check=False, capture_output=True)
+
+
 def speedup_vs(commit: str, batch: int, repeats: int, threads: int, rounds: int = 2) -> dict[str, float | str]:
     """ms per training iteration at ``batch`` here and at ``commit``, alternating ``rounds`` times, each tree with its
     runs' allocator setting and both with the same one; the ratios."""
-    with tempfile.TemporaryDirectory() as tmp:
-        tree = Path(tmp) / f"baseline-{os.getpid()}"  # git names the worktree after it: unique per process
-        subprocess.run(["git", "worktree", "add", "--detach", str(tree), commit], cwd=REPO, check=True,
-                       capture_output=True)  # fmt: skip
-        try:
-            ours, theirs, ours_same, theirs_same = [], [], [], []
-            for _ in range(rounds):
-                theirs.append(_iteration_ms(tree, batch, repeats, threads, {}))
-                ours.append(_iteration_ms(REPO, batch, repeats, threads, {}))
-                theirs_same.append(_iteration_ms(tree, batch, repeats, threads, SAME_ALLOCATOR))
-                ours_same.append(_iteration_ms(REPO, batch, repeats, threads, SAME_ALLOCATOR))
-        finally:
-            subprocess.run(["git", "worktree", "remove", "--force", str(tree)], cwd=REPO, check=False, capture_output=True)
+    with worktree(commit) as tree:
+        ours, theirs, ours_same, theirs_same = [], [], [], []
+        for _ in range(rounds):
+            theirs.append(_iteration_ms(tree, batch, repeats, threads, {}))
+            ours.append(_iteration_ms(REPO, batch, repeats, threads, {}))
+            theirs_same.append(_iteration_ms(tree, batch, repeats, threads, SAME_ALLOCATOR))
+            ours_same.append(_iteration_ms(REPO, batch, repeats, threads, SAME_ALLOCATOR))
     here, there = statistics.median(ours), statistics.median(theirs)
     here_same, there_same = statistics.median(ours_same), statistics.median(theirs_same)
     return {"commit": commit, "batch": batch, "ms": here, "baseline_ms": there, "speedup": there / here,

@@ -86,7 +86,8 @@ def write_config(cfg: DictConfig, overrides: list[str], run_dir: Path) -> None:
 
 def seed_runs(seeds: Sequence[int], overrides: Sequence[str], out_dir: Path) -> list[dict[str, Any]]:
     """Run the configured agent once per seed, alone, in this process, each into ``out_dir/default/seed=<n>`` (resumed
-    if already there); return each seed's steps-to-goal, wall seconds (``summary.json``) and wall share by part."""
+    if already there); return each seed's steps-to-goal, wall and CPU seconds (``summary.json``'s ``wall_seconds`` and
+    ``cpu_seconds``, None where a run resumed from before it had none) and wall share by part."""
     rows = []
     for seed in seeds:
         run_dir = out_dir / "default" / f"seed={seed}"  # the layout of a run, so the analysis names its command
@@ -100,5 +101,6 @@ def seed_runs(seeds: Sequence[int], overrides: Sequence[str], out_dir: Path) -> 
             timer.restore()
         saved = json.loads((run_dir / "summary.json").read_text())
         rows.append({"seed": seed, "steps_to_goal": saved["steps_to_goal"], "wall_s": saved["wall_seconds"],
+                     "cpu_s": saved.get("cpu_seconds"),
                      "wall_share": timer.shares(max(summary.wall_seconds, 1e-9)) if timer.seconds else {}})  # fmt: skip
     return rows
