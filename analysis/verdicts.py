@@ -86,7 +86,7 @@ CLAIMS = (
     Claim("Table 1", "Acrobot from pixels: Ours 290.0 ± 45.72 < Novelty/NSRS 576.0 ± 66.13 < ICM 932.8 ± 141.54 ≈ RND "
           "953.8 ± 85.98", "table1",
           (Comparison(OURS, "<", "nsrs*"), Comparison("nsrs*", "<", "icm*"), Comparison("icm*", "≈", "rnd*"),
-           # the paper's agent as its text reads and as its precursor code ran (method.md §0), and the oracle-model
+           # the paper's agent as its text reads and as its precursor code ran (docs/method.md §0), and the oracle-model
            # planner (the upper bound): beside the claim, which is about the default agent
            Comparison("paper_text-*", "<", "nsrs*", counts=False), Comparison("paper_code-*", "<", "nsrs*", counts=False),
            Comparison("oracle-conv_blur", "<", "nsrs*", counts=False),

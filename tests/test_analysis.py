@@ -139,11 +139,11 @@ def test_profile_of_a_sweep_root_profiles_each_run_finished_or_not(sweep: Path) 
     assert res.stdout.count("  total ") == 4 and "(unfinished: up to env step 1990)" in res.stdout  # 4 with metrics
 
 
-def test_the_readme_results_command_prints_the_readme_table() -> None:
-    readme = (REPO / "README.md").read_text()
-    command = re.search(r"`python -m (analysis\.steps_table [^`]*--markdown)`", readme)
-    assert command, "the README's Results section names its table's command"
+def test_the_results_doc_command_prints_its_table() -> None:
+    results = (REPO / "docs" / "results.md").read_text()
+    command = re.search(r"`python -m (analysis\.steps_table [^`]*--markdown)`", results)
+    assert command, "docs/results.md names its table's command"
     module, *args = command[1].removeprefix("analysis.").split()
     res = analysis(module, *args)
     assert res.returncode == 0, res.stderr
-    assert res.stdout.strip() in readme
+    assert res.stdout.strip() in results

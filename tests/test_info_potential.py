@@ -23,7 +23,7 @@ def _potential_loop(z: torch.Tensor, t: float) -> float:
     return math.log(total / len(pairs))
 
 
-# --- gaussian_potential (method.md §8, t = 2) ---
+# --- gaussian_potential (docs/method.md §8, t = 2) ---
 
 
 def test_identical_points_give_zero():

@@ -1,4 +1,4 @@
-"""Matrix-based Rényi entropy / MI: exact oracle values of method.md §8, properties, gradients and numerics."""
+"""Matrix-based Rényi entropy / MI: exact oracle values of docs/method.md §8, properties, gradients and numerics."""
 
 from __future__ import annotations
 
@@ -36,7 +36,7 @@ def _rotation(theta: float) -> torch.Tensor:
     return torch.tensor([[c, -s], [s, c]], dtype=F64)
 
 
-# --- exact oracle values (method.md §8: Gaussian kernel, σ = 2, bits) ---
+# --- exact oracle values (docs/method.md §8: Gaussian kernel, σ = 2, bits) ---
 
 
 def test_spectrum_oracle(xy):

@@ -1,4 +1,4 @@
-"""KDE novelty reward baselines (method.md §4 worked example), prediction-error bonus oracle, hybrid, state dicts."""
+"""KDE novelty reward baselines (docs/method.md §4 worked example), prediction-error bonus oracle, hybrid, state dicts."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from curiosity.novelty import BASELINES, KDENoveltyReward, kde_log_density, kde_
 
 F64 = torch.float64
 E = math.exp
-LOG_RHO = torch.tensor([-0.4398695, -2.5527778, -65.6094379], dtype=F64)  # method.md §4, 7 decimals
+LOG_RHO = torch.tensor([-0.4398695, -2.5527778, -65.6094379], dtype=F64)  # docs/method.md §4, 7 decimals
 LOG_RHO_EXACT = torch.tensor(  # the same, from the squared distances of each query to the five replay points
     [
         math.log((4 * E(-1 / 4) + E(-9 / 4)) / 5),
@@ -147,7 +147,7 @@ def test_hydra_instantiate():
 # --- prediction-error bonus ---
 
 PE_ERRORS = torch.tensor([0.0, 0.5, 1.0, 4.0], dtype=F64)
-PE_ORACLE = torch.tensor([0.0, 0.4054651081, 0.6931471806, 1.6094379124], dtype=F64)  # ē = 1, ε = 1e-8 (method.md §4)
+PE_ORACLE = torch.tensor([0.0, 0.4054651081, 0.6931471806, 1.6094379124], dtype=F64)  # ē = 1, ε = 1e-8 (docs/method.md §4)
 
 
 def test_pe_bonus_oracle():

@@ -1,6 +1,6 @@
 """The paper's agent (``baseline=none``): an IB-shaped latent world model, latent curiosity, and planning.
 
-Both readings of the paper (method.md §0) are this one class with different config: ``planner=mpc`` plans with the
+Both readings of the paper (docs/method.md §0) are this one class with different config: ``planner=mpc`` plans with the
 world model's reward model and the hybrid curiosity reward (paper text); ``planner=qtree`` searches NSRS's tree of
 edge novelties with a double-DQN Q at the leaves, trained on extrinsic + intrinsic reward (precursor code).
 """
@@ -23,6 +23,7 @@ from curiosity.agents.representation import (
     check_finite,
     encode_segments,
     representation_terms,
+    term_weights,
     total_loss,
 )
 from curiosity.agents.schedule import TrainSchedule
@@ -94,6 +95,9 @@ class PaperAgent(Agent):
         self.weights = LossWeights(transition=own.transition_coef, reward=own.reward_coef, backward=cfg.backward.coef,
                                    q=own.q_coef, sigma_b=cfg.backward.sigma_b, normalised_transition=own.normalised_transition,
                                    detach_targets=own.detach_targets)  # fmt: skip
+        # plug-in loss terms (agent.extra_terms): their parameters are trained and saved with the world model's
+        self.extra_terms = torch.nn.ModuleDict({name: build(node, latent_dim=int(own.internal_dim), n_actions=self.n_actions)
+                                                for name, node in own.extra_terms.items()}).to(self.device)  # fmt: skip
         self.planner: Planner = build(cfg.planner)
         self.q = (QLearner(self.model.encoder, own.internal_dim, self.n_actions, gamma=cfg.planner.gamma,
                            target_every=own.q_target_every, huber=own.q_huber)
@@ -102,7 +106,7 @@ class PaperAgent(Agent):
             self.q.to(self.device)
         self.updates = choice(own.updates)  # joint | nsrs (curiosity/agents/updates.py)
         self.optimizers = build_optimizers(self.updates, own.optimizer, self.model, self.model.encoder,
-                                           self.q.q if self.q is not None else None)  # fmt: skip
+                                           self.q.q if self.q is not None else None, self.extra_terms)  # fmt: skip
         relabel = self.q is not None and choice(own.q_intrinsic) == "relabel"
         self.relabelled = RelabelledRewards() if relabel else None  # NSRS's stored r_int of Q targets
         self.replay = ReplayBuffer(own.replay_capacity, obs_shape_of(cfg.env), pixel_uint8=self.obs_pixels)
@@ -125,7 +129,8 @@ class PaperAgent(Agent):
         first = tuple(f"planner/p_first/{a}" for a in range(self.n_actions))
         probe = probe_keys(cfg.planner.horizon) if self.probe_every else ()
         spread = tuple(f"planner/spread/{name}" for name in self.intrinsic.terms)  # each term's spread across candidates
-        self.metric_keys = (*LOSS_KEYS, *self.intrinsic.log_keys, *AGENT_KEYS, *spread, *first, *probe)
+        extra_keys = tuple(f"losses/{name}" for name in self.extra_terms)
+        self.metric_keys = (*LOSS_KEYS, *extra_keys, *self.intrinsic.log_keys, *AGENT_KEYS, *spread, *first, *probe)
         self._plan_logs: dict[str, float] = {}
         self.env: Any = None
         self.simulator: Simulator | None = None
@@ -332,10 +337,10 @@ class PaperAgent(Agent):
         the TD term of a Q-tree agent; nsrs, a representation step, then a Q step with the updated encoder."""
         seg = self.replay.sample_segments(self.cfg.agent.batch_size, self.cfg.agent.n_step, self.rng).to(self.device)
         enc = encode_segments(self.model, seg)
-        terms, logs = representation_terms(self.model, seg, enc, self.regulariser, self.weights)
+        terms, logs = representation_terms(self.model, seg, enc, self.regulariser, self.weights, self.extra_terms)
         first = seg.first_step().with_latents(enc.z[:, 0].detach(), enc.z[:, 1].detach())
         logs.update(self.intrinsic.update(first))  # rewards that learn (ICM, RND) take their step
-        weights = self.weights.of_terms()
+        weights = term_weights(self.weights, self.extra_terms)
         q_step = self.q is not None and (self.updates == "joint" or self.schedule.calls > 1)  # NSRS: none in call 1
         if q_step and self.updates == "joint":  # one step on every term, the TD term included
             terms["q"] = self._td_loss(enc.z[:, 0], enc.z[:, 1], seg, first)
@@ -372,12 +377,15 @@ class PaperAgent(Agent):
             "intrinsic": self.intrinsic.state_dict(), "schedule": self.schedule.state_dict(),
             "rng": self.rng.bit_generator.state, "generator": self.generator.get_state(), "totals": self.totals,
             "queue": list(self.queue),
+            **({"extra_terms": self.extra_terms.state_dict()} if len(self.extra_terms) else {}),
             **({"relabelled": self.relabelled.state_dict()} if self.relabelled is not None else {}),
         }  # fmt: skip
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
         self._latent = None
         self.model.load_state_dict(state["model"])
+        if len(self.extra_terms):
+            self.extra_terms.load_state_dict(state["extra_terms"])
         if self.q is not None:
             self.q.load_state_dict(state["q"])
         load_optimizers_state(self.optimizers, state)

@@ -1,4 +1,4 @@
-"""Intrinsic rewards of Q targets as NSRS's code keeps them (``agent.q_intrinsic=relabel``, nsrs-protocol.md §3.4, §4).
+"""Intrinsic rewards of Q targets as NSRS's code keeps them (``agent.q_intrinsic=relabel``, docs/protocol.md §3.4, §4).
 
 NSRS does not score a sampled batch when it builds Q targets: after every training call it recomputes the intrinsic
 reward of every transition in its buffer, with the encoder and memory of that moment, and stores it; a transition added

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from functools import partial
 
 import torch
-from torch import Tensor
+from torch import Tensor, nn
 
 from curiosity.nets.world_model import WorldModel
 from curiosity.errors import NumericalFault
@@ -18,6 +18,21 @@ from curiosity.nets.onehot import one_hot
 from curiosity.types import SegmentBatch
 
 Regulariser = Callable[[Tensor, Tensor, Tensor], tuple[Tensor, dict[str, float]]]
+
+
+class LossTerm(nn.Module):
+    """A plug-in term of the representation loss (``agent.extra_terms.<name>``: ``_target_`` a subclass, ``coef`` its
+    weight, built with ``latent_dim`` and ``n_actions``): L gains ``coef × term(model, seg, enc)``, logged as
+    ``losses/<name>``. A term may own parameters (a head): they are trained by the agent's optimiser with the world
+    model's and saved in its checkpoints."""
+
+    def __init__(self, coef: float = 1.0) -> None:
+        super().__init__()
+        self.coef = float(coef)
+
+    def forward(self, model: WorldModel, seg: SegmentBatch, enc: Encoded) -> Tensor:  # pragma: no cover - abstract
+        """The term's scalar value for one batch of segments (``enc.z``: (B, n + 1, d), ``enc.a1h``: (B, n, A))."""
+        raise NotImplementedError
 
 LOSS_KEYS = (
     "losses/transition",
@@ -85,13 +100,15 @@ def encode_segments(model: WorldModel, seg: SegmentBatch) -> Encoded:
 
 
 def representation_terms(
-    model: WorldModel, seg: SegmentBatch, enc: Encoded, regulariser: Regulariser, w: LossWeights
+    model: WorldModel, seg: SegmentBatch, enc: Encoded, regulariser: Regulariser, w: LossWeights,
+    extra: Mapping[str, LossTerm] | None = None,
 ) -> tuple[dict[str, Tensor], dict[str, float]]:
     """The representation loss's named terms for one batch (each checked finite), and their values as floats.
 
     Terms: ``transition`` (n-step, averaged over an ensemble's members), ``entropy`` (the regulariser on the first
     transition of each segment, (z_t, a_t, z_{t+1}), weighted inside), ``reward`` (with a reward model and
-    λ_R > 0), ``backward`` (with a backward predictor and λ_back > 0). Logs: ``losses/<term>``, the regulariser's own
+    λ_R > 0), ``backward`` (with a backward predictor and λ_back > 0), then each plug-in of ``extra`` under its
+    name (:class:`LossTerm`; weighted by :func:`term_weights`). Logs: ``losses/<term>``, the regulariser's own
     diagnostics, and ``info/latent_logdet``, the common yardstick :func:`~curiosity.info.latent_logdet` of z_{t+1}.
     """
     z, a1h = enc.z, enc.a1h
@@ -107,11 +124,19 @@ def representation_terms(
         y = torch.cat([z[:, :-1], a1h], dim=2)
         nll = partial(backward_predictor_nll, sigma_b=w.sigma_b)
         terms["backward"] = nstep_backward_loss(y, z[:, 1:], seg.terminateds, model.backward, nll)
+    for name, term in (extra or {}).items():
+        terms[name] = term(model, seg, enc)
     for name, value in terms.items():
         check_finite(f"losses/{name}", value)
     logs = {"losses/transition": terms["transition"].item(), **logs, "info/latent_logdet": latent_logdet(z[:, 1])}
-    logs.update({f"losses/{name}": terms[name].item() for name in ("reward", "backward") if name in terms})
+    logs.update({f"losses/{name}": terms[name].item() for name in ("reward", "backward", *(extra or {})) if name in terms})
     return terms, logs
+
+
+def term_weights(w: LossWeights, extra: Mapping[str, LossTerm] | None = None) -> dict[str, float]:
+    """name -> weight of every term a loss may have: the config's (:meth:`LossWeights.of_terms`) and each plug-in's
+    ``coef``."""
+    return {**w.of_terms(), **{name: term.coef for name, term in (extra or {}).items()}}
 
 
 def representation_loss(

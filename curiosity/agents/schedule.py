@@ -12,7 +12,7 @@ class TrainSchedule:
     ``(s + 1 - warmup_steps) % train_every == 0``; call ``k`` (0-based) runs ``iters_per_train * ramp[k]`` gradient
     iterations (``ramp[k] = 1`` past the end of ``ramp``). With ``early_stop_every > 0`` a call may stop at every
     multiple of ``early_stop_every`` iterations once the mean evaluation transition error over the iterations since
-    the previous check is at most ``early_stop_threshold`` (the precursor's rule, nsrs-protocol.md §3.4).
+    the previous check is at most ``early_stop_threshold`` (the precursor's rule, docs/protocol.md §3.4).
 
     Args:
         warmup_steps: uniformly random env steps before the first call.

@@ -3,7 +3,7 @@
 ``joint`` (default): one optimiser over every trained module and one backward pass of L = Σ_k w_k L_k, the TD term of a
 Q-tree agent included.
 
-``nsrs``: as NSRS's code steps (nsrs-protocol.md §3.3): a representation step -- one backward pass of the
+``nsrs``: as NSRS's code steps (docs/protocol.md §3.3): a representation step -- one backward pass of the
 representation loss, then an optimiser over the encoder alone *and* one over the whole world model (so the encoder gets
 two updates, with separate moment estimates) -- then, for a Q-tree agent, a Q step: the TD loss recomputed with the
 updated encoder, its gradients clamped elementwise to [-1, 1], and a third optimiser over encoder + Q; as in NSRS, the
@@ -23,15 +23,18 @@ from curiosity.build import build
 Q_GRAD_CLAMP = 1.0  # NSRS clamps the Q step's gradients elementwise to [-1, 1]
 
 
-def build_optimizers(rule: str, optimizer_cfg: Any, model: nn.Module, encoder: nn.Module,
-                     q: nn.Module | None) -> dict[str, torch.optim.Optimizer]:  # fmt: skip
-    """The optimisers of ``rule``: ``{"all"}`` (joint), or ``{"encoder", "model"[, "q"]}`` (nsrs)."""
+def build_optimizers(rule: str, optimizer_cfg: Any, model: nn.Module, encoder: nn.Module, q: nn.Module | None,
+                     extra: nn.Module | None = None) -> dict[str, torch.optim.Optimizer]:  # fmt: skip
+    """The optimisers of ``rule``: ``{"all"}`` (joint), or ``{"encoder", "model"[, "q"]}`` (nsrs); ``extra`` (the
+    plug-in loss terms' heads) is trained with the world model."""
+    extra_params = list(extra.parameters()) if extra is not None else []
     if rule == "joint":
-        return {"all": build(optimizer_cfg, params=[*model.parameters(), *(q.parameters() if q is not None else ())])}
+        return {"all": build(optimizer_cfg, params=[*model.parameters(), *extra_params,
+                                                     *(q.parameters() if q is not None else ())])}  # fmt: skip
     if rule != "nsrs":
         raise ValueError(f"agent.updates={rule}: allowed: joint, nsrs")
     out = {"encoder": build(optimizer_cfg, params=list(encoder.parameters())),
-           "model": build(optimizer_cfg, params=list(model.parameters()))}  # fmt: skip
+           "model": build(optimizer_cfg, params=[*model.parameters(), *extra_params])}  # fmt: skip
     if q is not None:
         out["q"] = build(optimizer_cfg, params=[*encoder.parameters(), *q.parameters()])
     return out

@@ -413,6 +413,8 @@ class AgentKeysConfig:
     normalised_transition: bool = False
     detach_targets: bool = False  # the precursor does not detach; detached targets collapsed the latent here
     replay_capacity: int = 1_000_000
+    # plug-in terms of the representation loss: name -> {_target_: a curiosity.agents.representation.LossTerm, coef}
+    extra_terms: dict[str, Any] = field(default_factory=dict)
     # diagnostics and the agent study (issue 11)
     transition_ensemble: int = 1
     probe_every: int = 100

@@ -1,4 +1,4 @@
-"""Acrobot-v1 (nsrs-protocol.md §1): its adapter, with the directed action and the mechanical energy.
+"""Acrobot-v1 (docs/protocol.md §1): its adapter, with the directed action and the mechanical energy.
 
 Acrobot cannot be solved without pumping energy into the two links, so "does the agent push with the motion?" (the
 directed action) and "does its novelty point towards higher energy?" (``analysis.landscape``) are task-level checks of

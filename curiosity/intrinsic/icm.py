@@ -1,7 +1,7 @@
 """Intrinsic Curiosity Module (Pathak et al., 2017): the bonus is the forward model's error in a learned feature space.
 
 Features φ are trained by an inverse model (which action led from o_t to o_{t+1}?), so they keep what the agent can
-affect; a forward model predicts φ_{t+1} from (φ_t, a_t), and its error is the curiosity bonus (method.md §7).
+affect; a forward model predicts φ_{t+1} from (φ_t, a_t), and its error is the curiosity bonus (docs/method.md §7).
 """
 
 from __future__ import annotations
@@ -40,7 +40,7 @@ class ICM(ReadsObsOrLatent, IntrinsicReward):
 
         L = loss_weight · [(1 − β) L_inv + β L_fwd],   L_fwd = mean_b ½ ‖φ̂_{t+1} − φ_{t+1}‖²,
 
-    with β = 0.2 and loss_weight = 10 by default (method.md §7). Norms are sums over the F features, so the
+    with β = 0.2 and loss_weight = 10 by default (docs/method.md §7). Norms are sums over the F features, so the
     bonus grows with ``feature_dim``; divide ``eta`` by F to get a per-feature mean. As in the original code,
     L_fwd's gradient reaches the encoder too (neither φ_t nor φ_{t+1} is detached); L_inv keeps φ from collapsing.
 

@@ -3,7 +3,7 @@ experience, by a density (KDE) or distance (kNN) estimator from the ``estimator`
 
 Input (``input``):
     ``state_action`` (paper text): memory rows y_t = [s_t, c·onehot(a_t)], an edge (s, a, s') is scored by
-    novelty(y) with y = [s, c·onehot(a)]; c = ``action_scale`` sets how far apart actions are (method.md §9).
+    novelty(y) with y = [s, c·onehot(a)]; c = ``action_scale`` sets how far apart actions are (docs/method.md §9).
     ``state`` (precursor code, NSRS): memory rows s_t; an edge is scored by the novelty of the state reached, s'.
     ``state_motion`` (ours, off by default): memory rows [s_{t+1}, m·(s_{t+1} − s_t)], the state each transition reached
     and the latent's one-step motion into it; an edge (s, a, s') is scored by novelty([s', m·(s' − s)]). A latent that

@@ -1,6 +1,6 @@
 """Small network factories for the baselines, so ICM and RND can be built from an observation shape alone.
 
-Pixel observations (C, H, W) get the NSRS-style conv stack (method.md §2); for the paper's 4×32×32 frames it is
+Pixel observations (C, H, W) get the NSRS-style conv stack (docs/method.md §2); for the paper's 4×32×32 frames it is
 
     Conv(4→8, 3, pad 1) tanh → Conv(8→16, 3, pad 1) tanh → MaxPool(4, pad 1) → Conv(16→32, 3) tanh → MaxPool(3)
     → flatten (128) → Linear(128→out_dim),

@@ -1,7 +1,7 @@
 """Random Network Distillation (Burda et al., 2018): the bonus is a predictor's error at matching a fixed random net.
 
 Both networks see the *next* observation o_{t+1}, normalised per pixel/feature by running statistics and clipped;
-the bonus is divided by the running std of its own discounted return (method.md §7).
+the bonus is divided by the running std of its own discounted return (docs/method.md §7).
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Named loss functions, each returning a scalar (method.md §3)."""
+"""Named loss functions, each returning a scalar (docs/method.md §3)."""
 
 from curiosity.losses.dqn import double_dqn_loss, double_dqn_target
 from curiosity.losses.masks import masked_step_mean, terminal_mask

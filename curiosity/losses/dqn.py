@@ -1,4 +1,4 @@
-"""Double-DQN temporal-difference loss (NSRS Q step, nsrs-protocol.md §3.3)."""
+"""Double-DQN temporal-difference loss (NSRS Q step, docs/protocol.md §3.3)."""
 
 from __future__ import annotations
 

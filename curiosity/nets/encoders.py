@@ -1,4 +1,4 @@
-"""Observation encoders E_φ: o_t ↦ s_t ∈ R^d (method.md §2)."""
+"""Observation encoders E_φ: o_t ↦ s_t ∈ R^d (docs/method.md §2)."""
 
 from __future__ import annotations
 
@@ -60,7 +60,7 @@ class FixedStandardiser(nn.Module):
 
 
 class ConvEncoder(nn.Module):
-    """NSRS's ``ImageEncoder`` for stacked 4×32×32 frames (nsrs-protocol.md §3.2).
+    """NSRS's ``ImageEncoder`` for stacked 4×32×32 frames (docs/protocol.md §3.2).
 
     Conv(C→8, 3, pad 1) tanh → Conv(8→16, 3, pad 1) tanh → MaxPool(4, pad 1) → Conv(16→32, 3) tanh → MaxPool(3)
     → flatten (128) → Linear(128→d). No output activation. 6,620 parameters for C = 4, d = 4.

@@ -1,4 +1,4 @@
-"""Latent Q-network (NSRS ``LowDimQFunction``, nsrs-protocol.md §3.2)."""
+"""Latent Q-network (NSRS ``LowDimQFunction``, docs/protocol.md §3.2)."""
 
 from __future__ import annotations
 

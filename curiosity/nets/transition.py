@@ -1,4 +1,4 @@
-"""Residual latent transition model T_ψ([s, a]) (method.md §2)."""
+"""Residual latent transition model T_ψ([s, a]) (docs/method.md §2)."""
 
 from __future__ import annotations
 

@@ -63,7 +63,7 @@ def kde_log_density(
             at once: a memory of 10^5 rows scores itself in 64 MB blocks, not 13 GB).
         precision: ``"float64"`` (the reference) or ``"float32"``: the dtype of the distances and kernel terms (each
             chunk's shift, log and the logsumexp over chunks stay float64). float32 is about 1.6× faster on a CPU
-            (measured in ``BENCHMARKS.md``) and, through the ‖q‖² + ‖m‖² − 2q·m expansion, off by about
+            (measured in ``docs/benchmarks.md``) and, through the ‖q‖² + ‖m‖² − 2q·m expansion, off by about
             1e-7 · (‖q‖² + ‖m‖²) / (2h²) nats (≈ 1e-4 on standardised latents): for approximate memories (a reservoir),
             whose sampling error is three orders larger. With a gradient to record it stays float64 (a speed option).
 

@@ -20,7 +20,7 @@ BASELINES = ("scalar", "pointwise", "printed", "zscore", "none")
 
 
 def kde_reward_scalar(log_rho: Tensor, log_rho0_bar: Tensor | float) -> Tensor:
-    """Default KDE reward (method.md §4): r = log ρ̄0 − log ρ(y), shapes (B,) and scalar -> (B,).
+    """Default KDE reward (docs/method.md §4): r = log ρ̄0 − log ρ(y), shapes (B,) and scalar -> (B,).
 
     ρ̄0 is a scalar reference: log ρ̄0 = mean over the random-phase samples of their log-density under their own KDE.
     Large where y is rare in the replay memory compared with what the random agent typically met (the paper's intent).
@@ -32,7 +32,7 @@ def kde_reward_pointwise(log_rho: Tensor, log_rho0: Tensor) -> Tensor:
     """Pointwise random-phase baseline with the intended sign: r = log ρ0(y) − log ρ(y), (B,), (B,) -> (B,).
 
     ρ0(y) is the KDE of the random-phase samples at y. Far outside their support log ρ0 → −∞, so this punishes
-    exactly the novel states (method.md §4); kept as an alternative.
+    exactly the novel states (docs/method.md §4); kept as an alternative.
     """
     return log_rho0 - log_rho
 
@@ -60,7 +60,7 @@ def kde_reward_none(log_rho: Tensor) -> Tensor:
 
 
 class KDENoveltyReward:
-    """KDE novelty reward r(y) from log ρ(y) over a memory and a random-phase baseline (method.md §4).
+    """KDE novelty reward r(y) from log ρ(y) over a memory and a random-phase baseline (docs/method.md §4).
 
     ``baseline`` selects the reward (see the named functions): ``"scalar"`` (default) log ρ̄0 − log ρ(y);
     ``"pointwise"`` log ρ0(y) − log ρ(y); ``"printed"`` log ρ(y) − log ρ0(y) (paper Eq. 7 as printed);

@@ -1,4 +1,4 @@
-"""Exhaustive novelty + Q tree search of NSRS (nsrs-protocol.md §5), with the subtree bookkeeping done right."""
+"""Exhaustive novelty + Q tree search of NSRS (docs/protocol.md §5), with the subtree bookkeeping done right."""
 
 from __future__ import annotations
 
