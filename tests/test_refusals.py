@@ -57,6 +57,7 @@ OUT_OF_RANGE = dict([
     _out_of_range("budget.max_steps", "0"), _out_of_range("budget.warmup_steps", "-1"),
     _out_of_range("budget.train_every", "0"), _out_of_range("budget.iters_per_train", "-1"),
     _out_of_range("budget.ramp", "[2,0]"), _out_of_range("budget.early_stop_every", "-1"),
+    _out_of_range("budget.plateau_every", "-1"), _out_of_range("budget.plateau_tol", "1.0"),
     _out_of_range("budget.early_stop_threshold", "0"), _out_of_range("estimator.bandwidth", "0"),
     _out_of_range("estimator.k", "0", "estimator=knn"), _out_of_range("entropy.coef", "-1"),
     _out_of_range("entropy.t", "0"), _out_of_range("entropy.alpha", "0", "entropy=renyi"),

@@ -113,3 +113,19 @@ def test_nsrs_first_call_trains_the_representation_alone_for_at_least_its_minimu
 def test_options_an_agent_does_not_read_are_refused(overrides: list[str], key: str) -> None:
     with pytest.raises(ConfigError, match=key.replace(".", r"\.")):
         validate(compose_cfg(overrides))
+
+
+def test_the_adaptive_schedule_stops_a_call_once_the_held_out_error_plateaus(one_thread) -> None:
+    from curiosity.agents.schedule import TrainSchedule
+
+    schedule = TrainSchedule(4, 1, 40, plateau_every=5, plateau_tol=0.1)
+    assert [i for i in range(1, 21) if schedule.checks_plateau(i)] == [5, 10, 15, 20]
+    assert schedule.plateaued(1.0, 0.95) and schedule.plateaued(1.0, 1.2) and not schedule.plateaued(1.0, 0.85)
+    # a tolerance no fall can meet stops the call at its first check; none at all runs it while the error falls
+    stopped = _filled(["budget.plateau_every=2", "budget.plateau_tol=0.99"], steps=14)
+    assert stopped._train(40)["train/iterations"] == 2.0
+    held = stopped._held_out()
+    assert held is not None and len(held) == 14  # fewer than 16 stored: all of them
+    assert held.index is not None and held.index.tolist() == list(range(14))  # the newest transitions
+    full = _filled(["budget.plateau_every=0"], steps=14)
+    assert full._train(40)["train/iterations"] == 40.0  # off: every call runs its iterations

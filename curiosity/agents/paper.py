@@ -55,6 +55,9 @@ SUMMARY_KEYS = ("planner/first_action_entropy", "planner/noise", "planner/noise_
                 "intrinsic/pe_estimate_corr")  # fmt: skip
 
 
+HELD_OUT_MIN = 16  # the adaptive schedule measures its model on at least this many of the newest transitions
+
+
 def obs_shape_of(env_cfg: DictConfig) -> tuple[int, ...]:
     """Observation shape an ``env`` node produces: (frame_stack, size, size) for pixels, (state_dim,) for states."""
     if choice(env_cfg.obs) == "pixels":
@@ -121,7 +124,7 @@ class PaperAgent(Agent):
         self.novelty: LatentNovelty | None = self.intrinsic.term(LatentNovelty)  # its memory, for analysis
         b = cfg.budget
         self.schedule = TrainSchedule(b.warmup_steps, b.train_every, b.iters_per_train, b.ramp, b.early_stop_every,
-                                      b.early_stop_threshold)  # fmt: skip
+                                      b.early_stop_threshold, b.plateau_every, b.plateau_tol)  # fmt: skip
         self.rng = np.random.default_rng([int(cfg.seed), 2])
         self.generator = torch.Generator().manual_seed(int(cfg.seed))
         self.oracle = choice(OmegaConf.select(cfg, "planner.model", default="learned")) == "oracle"
@@ -285,6 +288,8 @@ class PaperAgent(Agent):
         self._latent = None  # the encoder changes
         if self.schedule.calls == 1:
             self._calibrate()
+        held_out = self._held_out() if self.schedule.plateau_every else None
+        previous = self._held_out_error(held_out) if held_out is not None else None
         self.model.train()
         for done in range(1, iterations + 1):
             logs, eval_error = self._iteration()
@@ -295,11 +300,36 @@ class PaperAgent(Agent):
                 break
             if self.schedule.early_stop_every and done % self.schedule.early_stop_every == 0:
                 window = []
+            if held_out is not None and previous is not None and self.schedule.checks_plateau(done):
+                now = self._held_out_error(held_out)
+                self.model.train()
+                if self.schedule.plateaued(previous, now):
+                    break
+                previous = now
         out = {k: v / done for k, v in sums.items()}
         if self.relabelled is not None:  # NSRS: the buffer's intrinsic rewards as of this training call's end
             self._relabel()
         out.update({"train/iterations": float(done), "timing/train_ms": 1e3 * (time.perf_counter() - start)})
         return out
+
+    def _held_out(self) -> TransitionBatch | None:
+        """The newest transitions, for the adaptive schedule: those that arrived since the previous training call (none
+        of them trained on yet; at the first call, the warm-up's), at least ``HELD_OUT_MIN``; None when fewer than two."""
+        since = self.schedule.train_every if self.schedule.calls > 1 else len(self.replay)
+        count = min(max(since, HELD_OUT_MIN), len(self.replay))
+        if count < 2:
+            return None
+        index = np.arange(self.replay.total_added - count, self.replay.total_added)
+        return self.replay.transitions_at(index).to(self.device)
+
+    def _held_out_error(self, batch: TransitionBatch) -> float:
+        """The model's one-step error on ``batch`` relative to the size of the steps: mean ‖T(z, a) − z′‖² /
+        mean ‖z′ − z‖², with the current encoder (eval mode, no gradient); scale-free, as the latent moves."""
+        with self.model.evaluating():
+            z, z_next = self.model.encode(batch.obs), self.model.encode(batch.next_obs)
+            error = (self.model.next(z, batch.act) - z_next).square().sum(1).mean()
+            step = (z_next - z).square().sum(1).mean().clamp_min(1e-12)
+        return float(error / step)
 
     def _calibrate(self) -> None:
         """At the first training call a frozen encoder standardises its outputs by the warm-up's observations

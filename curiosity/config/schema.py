@@ -393,6 +393,11 @@ class BudgetConfig:
     ramp: list[int] = field(default_factory=list)  # multipliers of iters_per_train for the first calls
     early_stop_every: int = 0  # check the early-stop rule every this many iterations (0: never)
     early_stop_threshold: float = 0.00390625
+    # the adaptive schedule: iters_per_train is a call's most; every plateau_every iterations the model's error on the
+    # transitions since the previous call (held out so far) is measured, and the call stops once it fell by less than
+    # plateau_tol (a fraction) since the previous measurement. 0: off (every call runs iters_per_train)
+    plateau_every: int = 0
+    plateau_tol: float = 0.02
 
 
 # ---------------------------------------------------------------- agent (the learning agents' own keys)

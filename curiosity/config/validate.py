@@ -59,6 +59,8 @@ RULES: list[Rule] = [
     ("budget.ramp", lambda v: all(r >= 1 for r in v), "a list of integers >= 1"),
     ("budget.early_stop_every", lambda v: v >= 0, "an integer >= 0 (0 disables the early stop)"),
     ("budget.early_stop_threshold", lambda v: v > 0, "a number > 0"),
+    ("budget.plateau_every", lambda v: v >= 0, "an integer >= 0 (0: every call runs budget.iters_per_train)"),
+    ("budget.plateau_tol", lambda v: 0 <= v < 1, "a fraction in [0, 1)"),
     ("estimator.bandwidth", lambda v: v > 0, "a number > 0"),
     ("estimator.k", lambda v: v >= 1, "an integer >= 1"),
     ("entropy.coef", lambda v: v >= 0, "a number >= 0"),
