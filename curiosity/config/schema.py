@@ -252,17 +252,23 @@ class BackwardConfig:
 class MPCConfig:
     name: str = "mpc"
     _target_: str = "curiosity.planning.mpc.MPCPlanner"
-    horizon: int = 3
+    horizon: int = 5  # all 243 sequences (the text does not give H; +experiment=paper_text: 3)
     gamma: float = 0.9
-    temperature: float = 0.02
+    temperature: float = 0.0  # argmax (the text does not give tau; 0.02 sampled on noise, issue 11 audit)
     eta: float = 1.0
     max_candidates: int = "${power:${.n_actions},5}"  # type: ignore[assignment]  # A^5: 243 (3 actions), 1024 (a TV remote)
     sample_candidates: bool = False  # above max_candidates sequences: sample that many (true) or refuse (false)
     n_actions: int = "${env.n_actions}"  # type: ignore[assignment]
+    # absolute: softmax(G / tau) | spread: G standardised across the candidates first
     temperature_scale: TemperatureScale = TemperatureScale.absolute
+    # learned: imagined futures from the world model | oracle: the real simulator (an upper bound)
     model: PlannerModel = PlannerModel.learned
-    commit: int = 1  # actions of the chosen sequence executed before planning again (1: receding horizon)
-    hold: int = 1  # env steps each planned action is held for (the tree looks horizon x hold steps ahead)
+    # actions of the chosen sequence executed before planning again (1 <= commit <= horizon; 1: receding horizon, the
+    # text's reading; the default: the whole sequence, agent study)
+    commit: int = "${.horizon}"  # type: ignore[assignment]
+    # env steps each planned action is held for: H actions look H x hold steps ahead, A^H candidates; commit counts
+    # held actions (1: one action per step, the text's reading; 4: the agent study's, with encoder=conv_blur)
+    hold: int = 4
 
 
 @dataclass
@@ -365,6 +371,18 @@ class RNDTermConfig:
     scale: float = 1.0
 
 
+@dataclass
+class RE3TermConfig:
+    """RE3 (Seo et al. 2021, curiosity/intrinsic/re3.py): log(1 + distance to the k-th nearest neighbour) in a fixed
+    random encoder's space."""
+
+    _target_: str = "curiosity.intrinsic.re3.RE3.from_context"
+    input: RewardInput = RewardInput.obs  # latent: the agent's latents (then a planner can score imagined steps)
+    k: int = 3
+    capacity: int = 10000  # the first-in-first-out memory of random embeddings
+    out_dim: int = 32
+
+
 # ---------------------------------------------------------------- baseline (which agent runs)
 @dataclass
 class AgentConfig:
@@ -406,27 +424,32 @@ class AgentKeysConfig:
     """``agent.<key>``: what the learning agents train with (the paper's agent and NSRS read every key; the Q agent of
     ICM/RND reads ``internal_dim``, ``batch_size``, ``optimizer``, ``replay_capacity`` and ``q_*``; random reads none)."""
 
-    # representation learning
-    internal_dim: int = 4
-    n_step: int = 2
-    batch_size: int = 32
-    optimizer: Any = field(default_factory=lambda: {"_target_": "torch.optim.Adam", "lr": 5e-3})
-    transition_coef: float = 1.0
-    reward_coef: float = 1.0
-    transition_hidden: int = 10
-    transition_dropout: float = 0.5
-    normalised_transition: bool = False
-    detach_targets: bool = False  # the precursor does not detach; detached targets collapsed the latent here
-    replay_capacity: int = 1_000_000
+    # representation learning (paper §3.4-§3.8, §4.1); +experiment=paper_text sets the values the paper prints
+    internal_dim: int = 4  # latent dimension d (the paper: 2 or 4)
+    n_step: int = 2  # n of the n-step transition/reward/backward losses (not printed; our choice, for speed)
+    batch_size: int = 64  # segments per iteration (paper: 32; the agent study: 64)
+    # one optimiser over every trained module (paper: lr 5e-3, the optimiser not named; the agent study: 1e-3, since
+    # 5e-3 moves the memory's latents more between refreshes)
+    optimizer: Any = field(default_factory=lambda: {"_target_": "torch.optim.Adam", "lr": 0.001})
+    transition_coef: float = 1.0  # weight of L_trans(n)
+    reward_coef: float = 1.0  # lambda_R of the reward model loss (0 removes the reward model)
+    transition_hidden: int = 10  # residual transition MLP width (paper: 10)
+    # paper: 0.5; precursor code: 0.1; with 0.5 the model ignored the action (issue 11 audit)
+    transition_dropout: float = 0.0
+    normalised_transition: bool = False  # the normalised variant of L_trans (paper Eq. 20)
+    # encoded targets E(o_{t+i+1}) keep their gradient, as in the precursor; detached, the latent collapsed here
+    detach_targets: bool = False
+    replay_capacity: int = 1_000_000  # paper: 10^6
     # plug-in terms of the representation loss: name -> {_target_: a curiosity.agents.representation.LossTerm, coef}
     extra_terms: dict[str, Any] = field(default_factory=dict)
     # diagnostics and the agent study (issue 11)
+    # transition models in a deep ensemble (>= 2 for intrinsic.terms.pe.imagined=ensemble; the mean predicts)
     transition_ensemble: int = 1
-    probe_every: int = 100
-    # Q learning (planner=qtree, and the Q agent)
-    q_coef: float = 1.0
-    q_target_every: int = 1000
-    q_huber: bool = True
+    probe_every: int = 100  # agent steps between model-quality probes against the real simulator (probe/*); 0: off
+    # Q learning (planner=qtree: the precursor code and NSRS; the Q agent of ICM / RND)
+    q_coef: float = 1.0  # weight of the TD loss (TD gradients reach the encoder, as in NSRS)
+    q_target_every: int = 1000  # Q updates between target-network refreshes
+    q_huber: bool = True  # Huber TD loss (NSRS: SmoothL1)
     # how an iteration steps the parameters, and the intrinsic rewards of Q targets (curiosity/agents/updates.py,
     # curiosity/agents/relabel.py): ours, or NSRS's code's
     updates: UpdateRule = UpdateRule.joint  # joint: one optimiser, one step on L | nsrs: representation step, then Q step
@@ -448,11 +471,12 @@ class Config:
     budget: BudgetConfig = MISSING
     # run
     seed: int = 0
-    deterministic: bool = False
-    threads: int = 1
-    device: Device = Device.cpu  # where networks, batches, novelty memory and planning live
-    log_every: int = 10
-    progress: bool = True
+    deterministic: bool = False  # true: one thread and torch deterministic algorithms
+    threads: int = 1  # torch intra-op threads per run
+    # cpu | cuda | auto (cuda when available): networks, batches, novelty memory, planning (CUDA untested here)
+    device: Device = Device.cpu
+    log_every: int = 10  # env steps per metrics.csv row / TensorBoard point (per-step values are averaged)
+    progress: bool = True  # tqdm bar
     resume: bool = True  # re-running the same command on an existing run directory resumes its checkpoint
     checkpoint_every: int = 500  # env steps between checkpoints (also written at the end and on SIGTERM/SIGINT)
     checkpoint_keep: bool = False  # true: also keep each periodic checkpoint as checkpoints/step=<n>.pt
@@ -479,6 +503,7 @@ _GROUP_SCHEMAS: dict[str, dict[str, type]] = {
         "pe": PredictionErrorTermConfig,
         "icm": ICMTermConfig,
         "rnd": RNDTermConfig,
+        "re3": RE3TermConfig,
     },
     "baseline": {"agent": AgentConfig, "q_agent": QAgentConfig},
     "budget": {"budget": BudgetConfig},
