@@ -15,6 +15,7 @@ import torch
 from omegaconf import DictConfig, OmegaConf
 
 from curiosity.agents.base import Agent
+from curiosity.agents.diagnostics import PlanDiagnostics, PlanView
 from curiosity.agents.q_learning import QLearner
 from curiosity.agents.relabel import RelabelledRewards
 from curiosity.agents.representation import (
@@ -38,8 +39,6 @@ from curiosity.nets.backward import BackwardPredictor
 from curiosity.nets.encoders import FixedStandardiser
 from curiosity.nets.reward import RewardModel
 from curiosity.nets.transition import ResidualTransition, TransitionEnsemble
-from curiosity.planning.mpc import MPCPlanner
-from curiosity.planning.probe import probe_keys, probe_model
 from curiosity.planning.protocols import Plan, Planner, PlanRequest
 from curiosity.planning.rollout import SimulatorRollout
 from curiosity.replay import ReplayBuffer
@@ -49,12 +48,6 @@ from curiosity.types import SegmentBatch, TransitionBatch
 AGENT_KEYS = ("intrinsic/reward", "losses/q", "train/iterations", "planner/score", "planner/entropy",
               "planner/first_action_entropy", "planner/spread/score", "planner/spread/reward", "planner/noise",
               "planner/noise_flip", "timing/train_ms", "timing/plan_ms", "timing/probe_ms")  # fmt: skip
-# run means of these planner/probe columns go to summary.json ("agent")
-SUMMARY_KEYS = ("planner/first_action_entropy", "planner/noise", "planner/noise_flip", "probe/effect_ratio/1",
-                "probe/effect_ratio/3", "probe/spearman", "probe/agree", "memory/drift", "memory/refreshed",
-                "intrinsic/pe_estimate_corr")  # fmt: skip
-
-
 HELD_OUT_MIN = 16  # the adaptive schedule measures its model on at least this many of the newest transitions
 
 
@@ -128,35 +121,30 @@ class PaperAgent(Agent):
         self.rng = np.random.default_rng([int(cfg.seed), 2])
         self.generator = torch.Generator().manual_seed(int(cfg.seed))
         self.oracle = choice(OmegaConf.select(cfg, "planner.model", default="learned")) == "oracle"
-        self.probe_every = int(own.probe_every) if isinstance(self.planner, MPCPlanner) else 0  # it scores with MPC
+        self.diagnostics = PlanDiagnostics(self.planner, int(own.probe_every), int(cfg.budget.warmup_steps),
+                                           learned=not self.oracle)  # fmt: skip
         first = tuple(f"planner/p_first/{a}" for a in range(self.n_actions))
-        probe = probe_keys(cfg.planner.horizon) if self.probe_every else ()
+        probe = self.diagnostics.keys
         spread = tuple(f"planner/spread/{name}" for name in self.intrinsic.terms)  # each term's spread across candidates
         extra_keys = tuple(f"losses/{name}" for name in self.extra_terms)
         self.metric_keys = (*LOSS_KEYS, *extra_keys, *self.intrinsic.log_keys, *AGENT_KEYS, *spread, *first, *probe)
         self._plan_logs: dict[str, float] = {}
         self.env: Any = None
         self.simulator: Simulator | None = None
-        self.totals: dict[str, list[float]] = {}  # key -> [sum, count] of SUMMARY_KEYS
         self._latent: tuple[np.ndarray, torch.Tensor] | None = None  # the last observation encoded, until training
         self.queue: list[int] = []  # actions of the last chosen sequence still to execute (planner.commit > 1)
 
     def attach_env(self, env: Any) -> None:
         """Keep the run's env when the oracle planner or the probe branch its simulator."""
-        if self.oracle or self.probe_every:
+        if self.oracle or self.diagnostics.needs_simulator:
             self.env, self.simulator = env, Simulator(self.cfg.env)
+            self.diagnostics.simulator = self.simulator
 
     def summary(self) -> dict[str, Any]:
-        """Run means of the planner, probe and memory columns (``SUMMARY_KEYS``) and how imagined steps were made."""
-        means = {k: total / n for k, (total, n) in self.totals.items() if n}
-        return {"planner_model": "oracle" if self.oracle else "learned", **self.intrinsic.summary(), "means": means}
-
-    def _tally(self, logs: dict[str, float]) -> None:
-        for key in SUMMARY_KEYS:
-            if key in logs:
-                total = self.totals.setdefault(key, [0.0, 0])
-                total[0] += logs[key]
-                total[1] += 1
+        """Run means of the planner, probe and memory columns (``diagnostics.SUMMARY_KEYS``) and how imagined steps
+        were made."""
+        return {"planner_model": "oracle" if self.oracle else "learned", **self.intrinsic.summary(),
+                "means": self.diagnostics.means()}  # fmt: skip
 
     # ------------------------------------------------------------------ acting
     def encode_obs(self, obs: np.ndarray) -> torch.Tensor:
@@ -203,31 +191,6 @@ class PaperAgent(Agent):
             )
         )
 
-    def _score_noise(self, z0: torch.Tensor, obs: np.ndarray) -> dict[str, float]:
-        """Two fresh evaluations of the (stochastic) scores of every candidate: their noise and whether the best first
-        action flips between them. Only for learned-model MPC with full enumeration and a stochastic term."""
-        planner = self.planner
-        if not isinstance(planner, MPCPlanner) or self.oracle or not self.intrinsic.stochastic:
-            return {}
-        if planner.n_actions**planner.horizon > planner.max_candidates:
-            return {}
-        seqs = planner.candidates()
-        g1, g2 = (planner.scores(z0, seqs, self.model.next, self._reward_fn(), self.intrinsic.imagined_terms)
-                  for _ in range(2))  # fmt: skip
-        flip = int(seqs[int(g1.argmax()), 0]) != int(seqs[int(g2.argmax()), 0])
-        return {"planner/noise": float((g1 - g2).std(correction=0)) / 2**0.5, "planner/noise_flip": float(flip)}
-
-    def _probe(self, z0: torch.Tensor, obs: np.ndarray, step: int) -> dict[str, float]:
-        if not self.probe_every or (step - self.cfg.budget.warmup_steps) % self.probe_every:
-            return {}
-        assert isinstance(self.planner, MPCPlanner), "the probe scores with the MPC planner"
-        start = time.perf_counter()
-        assert self.simulator is not None, "attach_env() was not called"
-        out = probe_model(self.planner, z0, self.model.next, self._reward_fn(), self.intrinsic.imagined_terms,
-                          self.simulator, self._root(obs), self.model.encode)  # fmt: skip
-        out["timing/probe_ms"] = 1e3 * (time.perf_counter() - start)
-        return out
-
     def act(self, obs: np.ndarray, step: int) -> int:
         if self.queue:  # planner.commit > 1: the chosen sequence's next action, without planning
             self._plan_logs = {}
@@ -241,10 +204,10 @@ class PaperAgent(Agent):
                     "timing/plan_ms": plan_ms}  # fmt: skip
             logs.update({f"planner/{k}": v for k, v in plan.info.items()
                          if k.startswith(("spread/", "p_first/")) or k == "first_action_entropy"})  # fmt: skip
-            with torch.random.fork_rng(devices=[]):  # diagnostics draw dropout masks but never change the run's stream
-                logs.update(self._score_noise(z0, obs))
-                logs.update(self._probe(z0, obs, step))
-        self._tally(logs)
+            view = PlanView(z0, self.model.next, self._reward_fn(), self.intrinsic.imagined_terms,
+                            self.intrinsic.stochastic, lambda: self._root(obs), self.model.encode)  # fmt: skip
+            logs.update(self.diagnostics.after_plan(view, step))
+        self.diagnostics.tally(logs)
         self._plan_logs = logs
         self.queue = list(plan.sequence[1 : self.planner.commit])
         return plan.action
@@ -272,7 +235,8 @@ class PaperAgent(Agent):
             logs.update({f"intrinsic/{name}": float(v.mean()) for name, v in terms.items()})
             logs["intrinsic/reward"] = float(intrinsic.combine(terms)[0])
         logs.update(intrinsic.observe(batch))
-        self._tally({k: v for k, v in logs.items() if not k.startswith(("planner/", "probe/"))})  # act() tallied those
+        own_logs = {k: v for k, v in logs.items() if not k.startswith(("planner/", "probe/"))}  # act() tallied those
+        self.diagnostics.tally(own_logs)
         iterations = self.schedule.iterations(step)
         if iterations and self.schedule.calls == 1:  # NSRS: the first call is never shorter than its early-stop check
             iterations = max(iterations, int(self.cfg.agent.first_call_min_iterations))
@@ -405,7 +369,8 @@ class PaperAgent(Agent):
             "model": self.model.state_dict(), "q": self.q.state_dict() if self.q else None,
             **optimizers_state(self.optimizers), "replay": self.replay.state_dict(),
             "intrinsic": self.intrinsic.state_dict(), "schedule": self.schedule.state_dict(),
-            "rng": self.rng.bit_generator.state, "generator": self.generator.get_state(), "totals": self.totals,
+            "rng": self.rng.bit_generator.state, "generator": self.generator.get_state(),
+            "totals": self.diagnostics.state_dict(),
             "queue": list(self.queue),
             **({"extra_terms": self.extra_terms.state_dict()} if len(self.extra_terms) else {}),
             **({"relabelled": self.relabelled.state_dict()} if self.relabelled is not None else {}),
@@ -427,7 +392,7 @@ class PaperAgent(Agent):
         self.schedule.load_state_dict(state["schedule"])
         self.rng.bit_generator.state = state["rng"]
         self.generator.set_state(state["generator"])
-        self.totals = {k: list(v) for k, v in state.get("totals", {}).items()}
+        self.diagnostics.load_state_dict(state.get("totals", {}))
         self.queue = list(state.get("queue", []))  # checkpoints before planner.commit had none
 
 

@@ -46,6 +46,7 @@ class MPCPlanner:
             H × hold env actions, and :attr:`commit` counts env actions (``commit × hold``).
     """
 
+    scores_candidates: ClassVar[bool] = True  # scores an explicit candidate set (candidates(), scores())
     needs_q: ClassVar[bool] = False
 
     def __init__(

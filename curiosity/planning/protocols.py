@@ -69,6 +69,9 @@ class Planner(Protocol):
     """Chooses actions by searching imagined futures of the latent model."""
 
     needs_q: ClassVar[bool]  # whether the agent must train a Q-function and pass it as ``PlanRequest.q_fn``
+    # whether it scores an explicit set of candidate sequences (``candidates()``, ``scores(...)``), which the agent's
+    # diagnostics (score noise, the model probe) re-score
+    scores_candidates: ClassVar[bool]
     horizon: int  # how many steps ahead it looks
     commit: int  # how many actions of a plan the agent executes before planning again (1 <= commit <= len(sequence))
 

@@ -32,6 +32,7 @@ class QTreePlanner:
         n_actions: A.
     """
 
+    scores_candidates: ClassVar[bool] = False  # scores an explicit candidate set (candidates(), scores())
     needs_q: ClassVar[bool] = True  # Q at the leaves: the agent trains one and passes it as ``PlanRequest.q_fn``
     commit = 1  # actions executed per search: the tree's value is for the first action only
 

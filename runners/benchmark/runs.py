@@ -55,10 +55,12 @@ def _instrument(timer: PartTimer) -> None:
 
     def timed_agent(*args: Any, **kwargs: Any) -> Any:
         agent = build(*args, **kwargs)
-        for method, part in (("encode_obs", "encode"), ("_plan", "plan"), ("_train", "train"),
-                             ("_score_noise", "diagnostics"), ("_probe", "diagnostics")):  # fmt: skip
+        for method, part in (("encode_obs", "encode"), ("_plan", "plan"), ("_train", "train")):
             if hasattr(agent, method):
                 timer.wrap(agent, method, part)
+        diagnostics = getattr(agent, "diagnostics", None)  # the paper agent's score noise and model probe
+        if diagnostics is not None:
+            timer.wrap(diagnostics, "after_plan", "diagnostics")
         intrinsic = getattr(agent, "intrinsic", None)  # the intrinsic reward (random has none)
         if intrinsic is not None:
             for method in ("imagined_terms", "compute_terms", "observe"):
