@@ -1,9 +1,12 @@
-"""``python -m analysis.early``: early means and their Spearman correlation with steps-to-goal on synthetic run
+"""``python -m studies.early``: early means and their Spearman correlation with steps-to-goal on synthetic run
 directories with known numbers (``tests/synthetic_runs.py``: ``behaviour/directed`` = min(step / last step, 1), logged
 every 10 steps), against numpy and scipy on the same arrays; refusals in one line with nothing written."""
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -11,9 +14,9 @@ import pandas as pd
 import pytest
 from scipy.stats import spearmanr
 
-from analysis.early import correlations, early_table, write_early
+from studies.early import correlations, early_table, write_early
+from tests.conftest import REPO
 from tests.synthetic_runs import make_run
-from tests.test_analysis import analysis
 
 # (method, seed, steps-to-goal or None for the 3000-step cap)
 RUNS = [("ours", 0, 400), ("ours", 1, 800), ("ours", 2, None), ("ours", 3, 300), ("ours", 4, 150),
@@ -26,6 +29,15 @@ def root(tmp_path: Path) -> Path:
         make_run(tmp_path / "runs", "acrobot", method, seed, steps)
     make_run(tmp_path / "runs", "acrobot", "ours", 5, None, status="stopped")  # unfinished: not counted
     return tmp_path / "runs"
+
+
+def early(*args: str | Path, timeout: float = 120) -> subprocess.CompletedProcess:
+    """Run ``python -m studies.early ARGS`` from the repository root; ``timeout`` (s) only guards against a hang."""
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    res = subprocess.run([sys.executable, "-m", "studies.early", *map(str, args)], cwd=REPO, env=env,
+                         capture_output=True, text=True, timeout=timeout)  # fmt: skip
+    assert "Traceback" not in res.stdout + res.stderr, res.stderr
+    return res
 
 
 def expected_directed(last: int, until: int) -> float:
@@ -54,7 +66,7 @@ def test_early_means_and_spearman_against_numpy_and_scipy(root: Path) -> None:
 
 
 def test_the_command_writes_the_tables_and_rewrites_the_same_bytes(root: Path, tmp_path: Path) -> None:
-    res = analysis("early", root, "--out", tmp_path / "a", "--until", "200", "--columns", "behaviour/directed")
+    res = early(root, "--out", tmp_path / "a", "--until", "200", "--columns", "behaviour/directed")
     assert res.returncode == 0, res.stderr
     assert res.stdout.strip() == f"2 correlation(s) written to {tmp_path / 'a'}/early.{{md,csv}}"
     csv = pd.read_csv(tmp_path / "a" / "early.csv")
@@ -66,7 +78,7 @@ def test_the_command_writes_the_tables_and_rewrites_the_same_bytes(root: Path, t
 
 
 def test_default_columns_no_run_logs_are_left_out(root: Path, tmp_path: Path) -> None:
-    res = analysis("early", root, "--out", tmp_path)  # the synthetic runs log no probe/spearman
+    res = early(root, "--out", tmp_path)  # the synthetic runs log no probe/spearman
     assert res.returncode == 0, res.stderr
     header = pd.read_csv(tmp_path / "early.csv", nrows=0).columns
     assert "behaviour/directed" in header and "probe/spearman" not in header
@@ -77,7 +89,7 @@ def test_default_columns_no_run_logs_are_left_out(root: Path, tmp_path: Path) ->
     (["--columns", "behaviour/directed,behaviour/direct"], "--columns behaviour/direct"),  # a typo beside a real one
     (["--until", "ten"], "--until ten"), (["--until", "0"], "--until 0")])  # fmt: skip
 def test_bad_input_is_one_line_and_writes_nothing(root: Path, tmp_path: Path, args: list[str], key: str) -> None:
-    res = analysis("early", root, "--out", tmp_path / "out", *args)
+    res = early(root, "--out", tmp_path / "out", *args)
     assert res.returncode == 1 and res.stderr.startswith(f"error: {key}: ") and len(res.stderr.splitlines()) == 1
     assert "allowed" in res.stderr and not (tmp_path / "out").exists()
 
@@ -89,7 +101,7 @@ def test_an_included_run_is_named_relative_to_the_directory(tmp_path: Path) -> N
         make_run(tmp_path / "lender", "acrobot", "ours", seed, steps)
     make_run(tmp_path / "fig", "acrobot", "knn", 0, 700, estimator="knn")
     (tmp_path / "fig" / "analysis.yaml").write_text("include: ['../lender/acrobot/ours/h3/seed=*']\n")
-    res = analysis("early", tmp_path / "fig", "--columns", "behaviour/directed")
+    res = early(tmp_path / "fig", "--columns", "behaviour/directed")
     assert res.returncode == 0, res.stderr
     csv = pd.read_csv(tmp_path / "fig" / "report" / "early.csv")
     assert sorted(csv["run_dir"]) == ["../lender/acrobot/ours/h3/seed=0", "../lender/acrobot/ours/h3/seed=1",

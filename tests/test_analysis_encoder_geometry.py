@@ -1,4 +1,4 @@
-"""``python -m analysis.encoder_geometry``: its metrics on inputs with known answers, a tiny end-to-end run, refusals."""
+"""``python -m studies.encoder_geometry``: its metrics on inputs with known answers, a tiny end-to-end run, refusals."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from analysis import encoder_geometry as geo
+from studies import encoder_geometry as geo
 
 
 def test_geometry_is_one_for_the_state_itself_and_about_zero_for_noise() -> None:

@@ -1,4 +1,4 @@
-"""``python -m analysis.representation``: its metrics on inputs with known answers, a tiny end-to-end study, refusals."""
+"""``python -m studies.representation``: its metrics on inputs with known answers, a tiny end-to-end study, refusals."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from analysis import representation as rep
+from studies import representation as rep
 
 
 def test_auc_counts_pairs_and_halves_ties() -> None:

@@ -1,5 +1,5 @@
-"""Declared dependencies match the imports: every third-party module that the package, the runners or the analysis
-import is a dependency in ``pyproject.toml``, and every one the tests import is one or in the ``dev`` extra."""
+"""Declared dependencies match the imports: every third-party module that the package, the runners, the analysis or
+the studies import is a dependency in ``pyproject.toml``, and every one the tests import is one or in the ``dev`` extra."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from tests.conftest import REPO
 
 tomllib = pytest.importorskip("tomllib")  # Python >= 3.11
 
-LOCAL = {"curiosity", "runners", "analysis", "tests"}
+LOCAL = {"curiosity", "runners", "analysis", "studies", "tests"}
 DISTRIBUTION = {
     "yaml": "pyyaml",
     "cv2": "opencv-python-headless",
@@ -52,7 +52,8 @@ def _declared() -> tuple[set[str], set[str]]:
 
 def test_the_code_imports_only_declared_dependencies() -> None:
     main, _ = _declared()
-    assert _imported("curiosity", "runners", "analysis") <= main, _imported("curiosity", "runners", "analysis") - main
+    code = _imported("curiosity", "runners", "analysis", "studies")
+    assert code <= main, code - main
 
 
 def test_the_tests_import_only_declared_dependencies() -> None:

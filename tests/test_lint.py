@@ -1,5 +1,5 @@
 """``make lint`` passes: ``ruff check .`` (the rules in ``pyproject.toml``) finds nothing in any committed Python file,
-the scripts kept beside results under ``results/`` included."""
+the study instruments under ``studies/`` included."""
 
 from __future__ import annotations
 

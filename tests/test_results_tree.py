@@ -7,6 +7,7 @@ import subprocess
 
 from tests.conftest import REPO
 
+
 def committed(under: str) -> list[str]:
     """The paths git tracks below ``under`` (relative to the repository)."""
     out = subprocess.run(["git", "ls-files", "-z", under], cwd=REPO, capture_output=True, text=True, check=True).stdout
@@ -24,3 +25,9 @@ def test_results_has_no_pooled_root_report() -> None:
     # the per-preset reports (results/<preset>/report/) stay; a report pooling every run was rebuilt, figures and all,
     # at each landing
     assert committed("results/report") == []
+
+
+def test_results_holds_no_code() -> None:
+    # scripts and notebooks live in studies/ (python -m studies.<module>), where they are imported and tested
+    code = [p for p in committed("results") if p.endswith((".py", ".sh", ".ipynb"))]
+    assert code == [], f"code files under results/: {code}"

@@ -7,7 +7,7 @@ Input (``input``):
     ``state`` (precursor code, NSRS): memory rows s_t; an edge is scored by the novelty of the state reached, s'.
     ``state_motion`` (ours, off by default): memory rows [s_{t+1}, m·(s_{t+1} − s_t)], the state each transition reached
     and the latent's one-step motion into it; an edge (s, a, s') is scored by novelty([s', m·(s' − s)]). A latent that
-    codes the pose but not the velocity (the trained pixel encoder, ``analysis.encoder_geometry``) then still tells a
+    codes the pose but not the velocity (the trained pixel encoder, ``studies.encoder_geometry``) then still tells a
     fast swing from a slow one through its motion; m = ``motion_scale``, in motion standard deviations.
     ``random_target`` (ours, off by default; image observations): memory rows r_t = R(o_t), the codes of a frozen
     random conv encoder of blurred frames (:class:`~curiosity.novelty.random_target.RandomTarget`); a real edge is

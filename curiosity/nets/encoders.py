@@ -248,7 +248,7 @@ class ConvWithRandomFeatures(nn.Module):
     The first ``latent_dim − random_dim`` coordinates are learned (every loss trains them, as for ``encoder=conv``);
     the last ``random_dim`` come from a second conv encoder that keeps its random initial weights
     (``frozen=True``), by default on blurred frame differences, whose geometry follows the velocity
-    (``analysis.encoder_geometry``). Both parts are one latent for the transition model, the novelty and planning.
+    (``studies.encoder_geometry``). Both parts are one latent for the transition model, the novelty and planning.
 
     Args:
         in_channels: number of stacked frames C.

@@ -1,0 +1,1 @@
+"""The agent study's scripts (``results/agent_study/``, ``docs/agent_study.md``)."""

@@ -1,0 +1,1 @@
+"""The held-action study's offline checks (``results/agent_study/hold/``)."""

@@ -1,0 +1,1 @@
+"""One-off measurements behind ``results/bench/`` (the benchmarks themselves: ``runners.bench``)."""

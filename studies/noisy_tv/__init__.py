@@ -1,0 +1,1 @@
+"""The noisy-TV test's instruments (``results/noisy_tv/instrument/``)."""

@@ -1,0 +1,1 @@
+"""Issue 14's reference runs and their exact comparison (``results/refactor_issue14/``)."""
