@@ -62,10 +62,11 @@ def _apply(args: argparse.Namespace, found: dict[str, object]) -> None:
 
 
 def label_option(p: argparse.ArgumentParser) -> None:
-    """``--label SHORT=GLOB`` (repeatable): a short name for the row matching GLOB in the cost table and the Pareto
-    figure (:mod:`analysis.cost`); ``args.labels`` is None when not given, so ``analysis.yaml``'s ``labels`` apply."""
+    """``--label SHORT=GLOB`` (repeatable): a short name for the row matching GLOB in the cost table and every figure
+    (:mod:`analysis.cost`, :mod:`analysis.plotting`); ``args.labels`` is None when not given, so ``analysis.yaml``'s
+    ``labels`` apply."""
     p.add_argument("--label", dest="labels", action="append", default=None, metavar="SHORT=GLOB",
-                   help="short name for the row matching GLOB in the cost table and Pareto figure (repeatable)")  # fmt: skip
+                   help="short name for the row matching GLOB in the cost table and the figures (repeatable)")  # fmt: skip
 
 
 def run(p: argparse.ArgumentParser, command: Callable[[Options], str]) -> None:

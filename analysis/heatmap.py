@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 import torch
 
-from analysis.plotting import panels, save
+from analysis.plotting import DOUBLE, panels, save
 from curiosity.agents.paper import PaperAgent
 from curiosity.envs.make import observe_state
 from curiosity.envs.simulator import Simulator
@@ -111,7 +111,7 @@ def draw(run_dir: Path, out: Path, n: int) -> list[Path]:
     torch.manual_seed(0)  # the imagined prediction-error bonus samples dropout masks: the same map on every re-run
     values = scores(run.agent, observations(run.cfg, grid))
     ckpt = load_checkpoint(run_dir)
-    fig, axes = panels(3, width=3.6, height=3.2)
+    fig, axes = panels(3, width=DOUBLE / 3, height=2.2)  # two columns wide: every text 8 pt or more
     extent = (grid.xs[0], grid.xs[-1], grid.ys[0], grid.ys[-1])
     for ax, (name, v) in zip(axes, values.items(), strict=False):
         im = ax.imshow(v.reshape(n, n), origin="lower", extent=extent, aspect="auto", cmap="viridis")
@@ -119,7 +119,7 @@ def draw(run_dir: Path, out: Path, n: int) -> list[Path]:
         ax.set(xlabel=grid.names[0], ylabel=grid.names[1], title=f"{name} at step {run.step}")
     axes[2].imshow(visited(run.cfg, ckpt["coverage"]) if ckpt else np.zeros((2, 2)), origin="lower", extent=extent,
                    aspect="auto", cmap="Greys", vmin=0, vmax=1)  # fmt: skip
-    axes[2].set(xlabel=grid.names[0], ylabel=grid.names[1], title="visited cells (coverage grid)")
+    axes[2].set(xlabel=grid.names[0], ylabel=grid.names[1], title="visited (coverage grid)")
     return save(fig, out, "heatmap")
 
 

@@ -5,7 +5,8 @@
 files beside ``cost.{md,csv}`` (:mod:`analysis.cost`, whose rows, short names and reference these are). One panel per
 env; each row that records ``cpu_seconds`` is a point at x = its median CPU seconds per seed and y = its mean
 steps-to-goal (a run that did not reach the goal at its cap), each with a 95 % percentile-bootstrap CI over its seeds
-(:func:`analysis.stats.bootstrap_ci`: 2000 resamples, seed 0). The reference row is a black star; a dotted line marks
+(:func:`analysis.stats.bootstrap_ci`: 2000 resamples, seed 0), in the row's colour and marker of the other figures
+(:func:`analysis.plotting.row_names`). The reference row is a star (edged in black); a dotted line marks
 1.10 × its mean (the study's non-inferiority margin, on the means rather than their bound) and a dashed one 1/5 of its
 median CPU (the study's "5 × cheaper"); a grey line joins the points no other point beats on both axes (the front).
 ``pareto.csv`` holds what is plotted.
@@ -23,16 +24,12 @@ from matplotlib.container import ErrorbarContainer
 from matplotlib.ticker import LogFormatter
 
 from analysis.cli import Options, label_option, parser, run
-from analysis.cost import CHEAPER, MARGIN, has_cost, reference_rows, short_labels, with_extras
-from analysis.plotting import panels, save
+from analysis.cost import CHEAPER, MARGIN, has_cost, reference_rows, with_extras
+from analysis.plotting import TEXT, RowNames, legend_outside, panels, row_names, save, styles
 from analysis.rows import label_rows, load_runs, pool_rows
 from analysis.settings import DEFAULT_REFERENCE
 from analysis.stats import bootstrap_ci
 
-# Okabe & Ito's colour-blind-safe palette without its black (the reference's colour), and a marker per row as well
-PALETTE = ("#E69F00", "#56B4E9", "#009E73", "#0072B2", "#D55E00", "#CC79A7", "#F0E442")
-MARKERS = ("o", "s", "^", "D", "v", "P", "X", "<", ">", "h")
-TEXT = 8  # pt: the smallest text in the figure
 COLUMNS = ["env", "row", "label", "is_reference", "seeds", "cpu_runs", "cpu_median", "cpu_low", "cpu_high", "steps_mean",
            "steps_low", "steps_high", "on_front"]  # fmt: skip
 
@@ -77,13 +74,16 @@ def _point(ax: Axes, r: pd.Series, label: str, **style: object) -> None:
                 yerr=_errors(r.steps_mean, r.steps_low, r.steps_high), capsize=2, lw=1, label=label, **style)  # fmt: skip
 
 
-def _panel(ax: Axes, p: pd.DataFrame, prefix: str) -> None:
-    """One env's points (legend labels after ``prefix``), the reference's margin and cost lines and the front."""
+def _panel(ax: Axes, p: pd.DataFrame, prefix: str, names: RowNames) -> None:
+    """One env's points (legend labels after ``prefix``; the reference's first), the reference's margin and cost lines
+    and the front."""
     for _, r in p[p["is_reference"]].iterrows():
-        _point(ax, r, f"{prefix}{r.label}, the reference (n={r.seeds})", fmt="*", color="black", ms=11)
-    for i, (_, r) in enumerate(p[~p["is_reference"]].iterrows()):
-        _point(ax, r, f"{prefix}{r.label} (n={r.seeds})", fmt=MARKERS[i % len(MARKERS)], color=PALETTE[i % len(PALETTE)],
-               ms=6)  # fmt: skip
+        _point(ax, r, f"{prefix}{r.label}, the reference (n={r.seeds})", fmt="*", color=names.style[r.label].colour,
+               ms=11, mec="black", mew=0.6)  # fmt: skip
+    others = p[~p["is_reference"]]
+    for _, r in sorted(others.iterrows(), key=lambda ir: names.rank(ir[1].env, ir[1].row)):
+        style = names.style[r.label]
+        _point(ax, r, f"{prefix}{r.label} (n={r.seeds})", fmt=style.marker, color=style.colour, ms=5)
     for _, r in p[p["is_reference"]].iterrows():
         ax.axhline(MARGIN * r.steps_mean, color="0.3", ls=":", lw=1, label=f"{MARGIN:.2f} × the reference's mean steps")
         ax.axvline(r.cpu_median / CHEAPER, color="0.5", ls="--", lw=1, label=f"{CHEAPER:g} × cheaper than the reference")
@@ -95,25 +95,29 @@ def _panel(ax: Axes, p: pd.DataFrame, prefix: str) -> None:
     ax.xaxis.set_major_formatter(LogFormatter())
     ax.xaxis.set_minor_formatter(LogFormatter(labelOnlyBase=False, minor_thresholds=(1, 0.6)))
     ax.tick_params(which="both", labelsize=TEXT)
-    ax.set_xlabel("CPU seconds per seed (median, 95 % CI; log scale)", fontsize=TEXT + 1)
-    ax.set_ylabel("steps-to-goal (mean, 95 % CI; cap counted)", fontsize=TEXT + 1)
-    ax.set_title(f"{p['env'].iloc[0]}: cost against sample efficiency (lower left is better)", fontsize=TEXT + 1)
+    ax.set_xlabel("CPU s per seed (median, 95 % CI)")
+    ax.set_ylabel("steps-to-goal (mean, 95 % CI)")
+    ax.set_title(f"{p['env'].iloc[0]} (lower left is better)")
 
 
-def plot_pareto(points: pd.DataFrame, out: Path) -> list[Path]:
-    """``pareto.png`` and ``pareto.pdf`` of ``points`` (:func:`pareto_points`), the legend below the panels."""
+def plot_pareto(points: pd.DataFrame, out: Path, names: RowNames | None = None) -> list[Path]:
+    """``pareto.png`` and ``pareto.pdf`` of ``points`` (:func:`pareto_points`), rows in the styles of ``names`` (by
+    default in the points' order), the legend outside the panels (:func:`analysis.plotting.legend_outside`)."""
+    if names is None:
+        short = {(str(e), str(r)): str(n) for e, r, n in zip(points["env"], points["row"], points["label"], strict=True)}
+        order = list(dict.fromkeys(points["label"].astype(str)))
+        names = RowNames(short, order, styles(order))
     envs = sorted(points["env"].astype(str).unique())
-    fig, axes = panels(len(envs), width=5.5, height=4.0)
+    fig, axes = panels(len(envs))
+    fig.set_figheight(fig.get_figheight() + 0.3)
     for ax, env in zip(axes, envs, strict=True):
-        _panel(ax, points[points["env"] == env], f"{env}: " if len(envs) > 1 else "")
+        _panel(ax, points[points["env"] == env], f"{env}: " if len(envs) > 1 else "", names)
     handles: dict[str, object] = {}
     for ax in axes:
         for h, label in zip(*ax.get_legend_handles_labels(), strict=True):
             handles.setdefault(label, h)
     points_first = sorted(handles, key=lambda label: not isinstance(handles[label], ErrorbarContainer))  # stable
-    handles = {label: handles[label] for label in points_first}
-    fig.legend(list(handles.values()), list(handles), loc="upper center", bbox_to_anchor=(0.5, 0.0), ncol=1,
-               frameon=False, fontsize=TEXT)  # fmt: skip
+    legend_outside(fig, axes, {label: handles[label] for label in points_first})
     return save(fig, out, "pareto")
 
 
@@ -123,8 +127,9 @@ def write_pareto(runs: pd.DataFrame, out: Path, reference: str, labels: Sequence
     runs = with_extras(runs)
     if not has_cost(runs):
         return []
-    points = pareto_points(runs, reference, short_labels(runs, labels))
-    paths = plot_pareto(points, out)
+    names = row_names(runs, labels)
+    points = pareto_points(runs, reference, names.short)
+    paths = plot_pareto(points, out, names)
     points.to_csv(out / "pareto.csv", index=False, float_format="%.6g", lineterminator="\n")
     return [*paths, out / "pareto.csv"]
 

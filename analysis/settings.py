@@ -4,7 +4,8 @@
 Keys: ``pool`` (a list of ``LABEL=GLOB``), ``group_by`` (a list of config keys), ``reference`` (a row glob),
 ``include`` (a list of globs, relative to RUNS_DIR, of run directories another preset made with the same config:
 :mod:`analysis.include`) and ``labels`` (a list of ``SHORT=GLOB``: a short name for the row matching the glob, shown
-by the cost table and the Pareto figure, :mod:`analysis.cost`; the other tables keep the rows' own labels).
+by the cost table and every figure, :mod:`analysis.cost`, :mod:`analysis.plotting`, in the order listed; the other
+tables keep the rows' own labels).
 """
 
 from __future__ import annotations

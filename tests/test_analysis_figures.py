@@ -1,28 +1,54 @@
 """``analysis.figures`` on synthetic run directories: every figure is written as a PNG and a PDF that open, the same
-bytes on a re-run, and the stable-reward steps are the ones the criterion gives."""
+bytes on a re-run, and the stable-reward steps are the ones the criterion gives; rows are named by ``analysis.yaml``'s
+short names, each in its own colour, every text at least 8 pt, the legend outside the panels."""
 
 from __future__ import annotations
 
 import numpy as np
 import pandas as pd
 import pytest
+import yaml
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.colors import to_hex
+from matplotlib.figure import Figure
+from matplotlib.text import Text
 from PIL import Image
 
+import analysis.figures as figures_module
 from analysis.curves import mean_band, running_rate, stable_step
 from analysis.figures import FIGURES, write_figures
 from tests.synthetic_runs import make_runs
 from tests.test_analysis import analysis
 
+POOL = "ours (Rényi, pooled)=ours-*renyi*"
+# The synthetic rows' short names, in the order the legends list them ("[[]" a literal "[" in a glob).
+LABELS = ["NSRS=nsrs", "NSRS (horizon 3)=nsrs [[]planner.horizon=3]", "NSRS (horizon 5)=nsrs [[]planner.horizon=5]",
+          "Rényi (pooled)=ours (Rényi, pooled)", "Random=random"]  # fmt: skip
+SHORT = [label.partition("=")[0] for label in LABELS]
+
 
 @pytest.fixture(scope="module")
 def written(tmp_path_factory: pytest.TempPathFactory) -> tuple:
+    """The figures of the synthetic runs (``analysis.yaml`` holding the pool and the short names), and each figure as
+    drawn (``save`` watched)."""
     root = make_runs(tmp_path_factory.mktemp("runs"))
+    (root / "analysis.yaml").write_text(yaml.safe_dump({"pool": [POOL], "labels": LABELS}, allow_unicode=True))
     out = root.parent / "figures"
-    return root, out, write_figures(root, out, pools=["ours (Rényi, pooled)=ours-*renyi*"])
+    drawn: dict[str, Figure] = {}
+    save = figures_module.save
+
+    def watched(fig: Figure, where, name: str) -> list:
+        drawn[name] = fig
+        return save(fig, where, name)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(figures_module, "save", watched)
+        files = write_figures(root, out, pools=[POOL], labels=LABELS)
+    return root, out, files, drawn
 
 
 def test_every_figure_is_a_png_and_a_pdf_that_open(written: tuple) -> None:
-    _, out, files = written
+    _, out, files, _ = written
     for name in (n for n in FIGURES if n != "tv_presses"):  # no run here has a noisy TV (test_analysis_tables.py)
         png, pdf = out / f"{name}.png", out / f"{name}.pdf"
         assert png in files and pdf in files and png.stat().st_size > 0
@@ -32,7 +58,7 @@ def test_every_figure_is_a_png_and_a_pdf_that_open(written: tuple) -> None:
 
 
 def test_stability_lists_each_seed_and_kde_settles_before_knn(written: tuple) -> None:
-    _, out, _ = written
+    _, out, _, _ = written
     table = pd.read_csv(out / "stability.csv")
     assert len(table) == 16  # every finished synthetic run logs intrinsic/reward
     by = table.groupby("estimator")["stable_step"].median()
@@ -62,8 +88,9 @@ def test_running_rate_weights_each_logged_window_by_its_env_steps() -> None:
 
 
 def test_the_command_rewrites_the_same_bytes(written: tuple, tmp_path) -> None:
-    root, _, files = written
-    res = analysis("figures", root, "--out", tmp_path, "--pool", "ours (Rényi, pooled)=ours-*renyi*")
+    """The bare command (the pool and the short names from ``analysis.yaml``) draws what ``write_figures`` drew."""
+    root, _, files, _ = written
+    res = analysis("figures", root, "--out", tmp_path)
     assert res.returncode == 0, res.stderr
     for f in files:
         assert (tmp_path / f.name).read_bytes() == f.read_bytes(), f.name  # exact: the same drawing, no timestamps
@@ -78,9 +105,11 @@ def test_no_finished_run_is_one_line(tmp_path) -> None:
 def test_a_wide_figure_is_saved_at_most_png_max_width_pixels_wide(tmp_path) -> None:
     """A figure with many long row labels (the top-level report's) is written as a PNG at most ``PNG_MAX_WIDTH``
     pixels wide, at a lower dpi; the PDF beside it keeps every detail; a narrow figure keeps the default dpi."""
+    import matplotlib.pyplot as plt
+
     from analysis.plotting import PNG_MAX_WIDTH, panels, save
 
-    fig, axes = panels(6)  # 27 inches: 3,240 pixels at the default 120 dpi
+    fig, axes = panels(6, width=4.5)  # 27 inches side by side: 5,400 pixels at the default 200 dpi
     for ax in axes:
         ax.plot([0, 1], [0, 1], label="a long row label " * 8)
     png, pdf = save(fig, tmp_path, "wide")
@@ -90,7 +119,7 @@ def test_a_wide_figure_is_saved_at_most_png_max_width_pixels_wide(tmp_path) -> N
     fig, _ = panels(1)
     png, _ = save(fig, tmp_path, "narrow")
     with Image.open(png) as image:
-        assert image.width < PNG_MAX_WIDTH and image.info["dpi"][0] == pytest.approx(120, abs=1)
+        assert image.width < PNG_MAX_WIDTH and image.info["dpi"][0] == pytest.approx(plt.rcParams["savefig.dpi"], abs=1)
 
 
 def test_a_grid_too_tight_to_lay_out_is_saved_without_a_warning(tmp_path) -> None:
@@ -114,3 +143,89 @@ def test_a_grid_too_tight_to_lay_out_is_saved_without_a_warning(tmp_path) -> Non
     assert not [str(w.message) for w in caught]
     with Image.open(png) as image:
         assert image.width > 0
+
+
+def _legend_texts(fig: Figure) -> list[str]:
+    return [t.get_text() for t in fig.legends[0].get_texts()]
+
+
+def test_rows_are_named_by_their_short_names_in_the_order_listed(written: tuple) -> None:
+    """The legends and the steps-to-goal panels name the rows by ``analysis.yaml``'s short names, in its order (the
+    tables keep the row labels: ``test_stability_lists_each_seed_and_kde_settles_before_knn``)."""
+    drawn = written[3]
+    assert _legend_texts(drawn["reached_fraction"]) == SHORT
+    assert _legend_texts(drawn["coverage"]) == SHORT
+    assert _legend_texts(drawn["intrinsic"])[:-1] == SHORT  # then the dashed stable step's key
+    acrobot, mountaincar = drawn["steps_to_goal"].axes
+    assert [t.get_text() for t in acrobot.get_yticklabels()] == ["NSRS (horizon 3)", "NSRS (horizon 5)", "Random"]
+    assert [t.get_text() for t in mountaincar.get_yticklabels()] == ["NSRS", "Rényi (pooled)"]
+    assert _legend_texts(drawn["behaviour"]) == [  # one panel draws both envs: the env before the name
+        "mountaincar: NSRS", "acrobot: NSRS (horizon 3)", "acrobot: NSRS (horizon 5)", "mountaincar: Rényi (pooled)"]
+
+
+def test_every_text_is_at_least_8_pt(written: tuple) -> None:
+    for name, fig in written[3].items():
+        texts = [t for t in fig.findobj(Text) if t.get_visible() and t.get_text().strip()]
+        assert texts, name
+        small = sorted({(t.get_text(), t.get_fontsize()) for t in texts if t.get_fontsize() < 8})
+        assert not small, f"{name}: {small[:3]}"
+
+
+def test_each_row_has_its_own_colour_in_every_figure(written: tuple) -> None:
+    """Distinct colours within a legend, and a row's colour the same in every figure."""
+    seen: dict[str, str] = {}
+    for name in ("reached_fraction", "coverage", "intrinsic", "entropy"):
+        legend = written[3][name].legends[0]
+        colours = {t.get_text(): to_hex(h.get_color()) for t, h in zip(legend.get_texts(), legend.legend_handles,
+                                                                        strict=True) if t.get_text() in SHORT}  # fmt: skip
+        assert len(set(colours.values())) == len(colours), name
+        for row, colour in colours.items():
+            assert seen.setdefault(row, colour) == colour, (name, row)
+    assert len(seen) == len(SHORT)
+
+
+def _renderer(fig: Figure):
+    """A renderer of a figure ``save`` closed (its layout as saved)."""
+    return FigureCanvasAgg(fig).get_renderer()
+
+
+def _overlaps(a, b) -> bool:
+    return a.x0 < b.x1 and b.x0 < a.x1 and a.y0 < b.y1 and b.y0 < a.y1
+
+
+def test_the_legend_covers_no_panel_and_no_panel_is_tall_and_narrow(written: tuple) -> None:
+    for name, fig in written[3].items():
+        renderer = _renderer(fig)
+        panels = [ax.get_window_extent(renderer) for ax in fig.axes if ax.axison]
+        for legend in fig.legends:
+            box = legend.get_window_extent(renderer)
+            assert not any(_overlaps(box, p) for p in panels), name
+        assert all(p.width >= p.height for p in panels), name
+        assert fig.get_figwidth() <= 6.9 + 1e-9, name  # at most two columns wide
+
+
+def test_a_tall_legend_of_a_one_column_figure_goes_beside_the_panel(tmp_path) -> None:
+    """Ten rows of long names under a one-column panel would take ten lines: the legend goes to the panel's right, the
+    figure widened (at most to two columns), the panel laid out left of it."""
+    from analysis.plotting import DOUBLE, SINGLE, legend_outside, panels, save
+
+    fig, (ax,) = panels(1)
+    assert fig.get_figwidth() == SINGLE
+    for i in range(10):
+        ax.plot([0, 1], [i, i + 1], label=f"a long name for row {i} of ten")
+    legend = legend_outside(fig, [ax])
+    save(fig, tmp_path, "beside")
+    renderer = _renderer(fig)
+    box, panel = legend.get_window_extent(renderer), ax.get_window_extent(renderer)
+    assert legend._ncols == 1 and box.x0 >= panel.x1 and SINGLE < fig.get_figwidth() <= DOUBLE
+
+
+def test_two_rows_of_an_env_may_not_share_a_short_name_and_a_name_for_no_row_is_warned_of() -> None:
+    from analysis.plotting import row_names
+
+    rows = pd.DataFrame({"env": ["acrobot", "acrobot", "mountaincar"], "row": ["icm", "rnd", "icm"]})
+    assert row_names(rows, ["baseline=icm", "RND=rnd"]).order == ["baseline", "RND"]  # one name over two envs: fine
+    with pytest.raises(ValueError, match="two rows of acrobot are both named 'baseline'"):
+        row_names(rows, ["baseline=icm", "baseline=rnd"])
+    with pytest.warns(UserWarning, match="labels: 'α = 0.5=ours' matches no row"):  # the name ends at its first "="
+        row_names(rows, ["α = 0.5=ours"])
