@@ -128,3 +128,9 @@ def test_studies_import_only_downward() -> None:
     local = {"curiosity", "analysis", "runners", "studies", "tests", "examples"}
     for path in (REPO / "studies").rglob("*.py"):
         assert not (_imports(path) & local) - {"curiosity", "analysis", "runners", "studies"}, path
+
+
+def test_the_reference_runs_name_the_agent_keys_as_this_tree_does() -> None:
+    from studies.refactor.reference_runs import agent_prefix
+
+    assert agent_prefix(REPO) == "agent."  # the agent's keys live in the schema now, no longer in conf/config.yaml

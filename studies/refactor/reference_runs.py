@@ -46,8 +46,12 @@ def configurations(agent: str = "agent.") -> dict[str, list[str]]:
 
 
 def agent_prefix(checkout: Path) -> str:
-    """``agent.`` where the checkout's config has an ``agent:`` group, else the empty prefix."""
-    return "agent." if re.search(r"^agent:", (checkout / "conf" / "config.yaml").read_text(), re.MULTILINE) else ""
+    """``agent.`` where the checkout's config has the ``agent`` group (in ``conf/config.yaml`` until the schema alone
+    held it: ``AgentKeysConfig``), else the empty prefix (the keys before dfebfdf)."""
+    config = (checkout / "conf" / "config.yaml").read_text()
+    schema = checkout / "curiosity" / "config" / "schema.py"
+    in_schema = schema.is_file() and "class AgentKeysConfig" in schema.read_text()
+    return "agent." if re.search(r"^agent:", config, re.MULTILINE) or in_schema else ""
 
 
 def main(argv: list[str] | None = None) -> int:
