@@ -28,9 +28,10 @@ def test_the_report_embeds_the_table_and_every_figure(tmp_path) -> None:
 
 
 # issue 15's claims and issue 16's test: results/<preset>/ (conf/sweep/)
-PRESETS = ("table1", "table2", "fig6", "fig7", "hybrid", "noisy_tv")
+PRESETS = ("table1", "table2", "fig6", "fig7", "hybrid", "noisy_tv", "cheap_seed")  # and issue 50's study
 TABLES = ("steps_to_goal.md", "steps_to_goal.tex", "steps_to_goal.csv", "incomplete.csv", "spread.md", "spread.csv",
-          "stable_step.md", "stable_step.csv", "distractor.md", "distractor.csv")  # fmt: skip
+          "stable_step.md", "stable_step.csv", "distractor.md", "distractor.csv", "cost.md", "cost.csv",
+          "pareto.csv")  # fmt: skip
 
 
 def test_every_claims_table_committed_is_what_the_bare_command_writes(tmp_path) -> None:
