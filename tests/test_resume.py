@@ -19,7 +19,7 @@ from curiosity.errors import CheckpointError, RunDirectoryError
 from curiosity.runtime.checkpoint import load_checkpoint, save_checkpoint
 from curiosity.runtime.logger import is_wall_clock
 from curiosity.runtime.loop import run
-from tests.conftest import REPO, compose_cfg, run_cli
+from tests.conftest import REPO, compose_cfg, holding_lock, run_cli
 
 ARGS = ["budget=smoke", "budget.max_steps=120", "budget.warmup_steps=40", "env.renderer=fast", "deterministic=true",
         "planner.horizon=3",  # 27 sequences: what is tested here is resuming, not planning; keeps the suite short
@@ -161,14 +161,10 @@ def test_a_finished_run_kept_without_its_checkpoint_is_complete_and_left_as_it_w
 
 
 def test_a_live_writer_locks_its_run_directory(tmp_path: Path) -> None:
-    sleeper = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
-    try:
-        (tmp_path / "run.lock").write_text(str(sleeper.pid))
-        with pytest.raises(RunDirectoryError, match="being written by process"):
+    with holding_lock(tmp_path) as pid:
+        with pytest.raises(RunDirectoryError, match=f"being written by process {pid}"):
             run(compose_cfg(ARGS), tmp_path)
-    finally:
-        sleeper.kill()
-        sleeper.wait()
+    assert (tmp_path / "run.lock").read_text() == str(pid)  # the dead owner's file is still there, its lock is not
     assert run(compose_cfg([*ARGS, "budget.max_steps=50"]), tmp_path).env_steps == 50  # a dead owner's lock is stale
 
 

@@ -50,8 +50,23 @@ def _swept(params: dict[str, str]) -> dict[str, list[str]]:
     return out
 
 
+# studies over the tuning seeds (not claims): the default agent plus a point's command-line overrides
+STUDIES = {"cheap_seed": ("results/cheap_seed", "acrobot", 30)}
+
+
 def test_every_preset_has_a_file() -> None:
-    assert sorted(p.stem for p in (CONF / "sweep").glob("*.yaml")) == sorted(PRESETS)
+    assert sorted(p.stem for p in (CONF / "sweep").glob("*.yaml")) == sorted([*PRESETS, *STUDIES])
+
+
+@pytest.mark.parametrize("study", sorted(STUDIES))
+def test_a_study_sweeps_the_tuning_seeds_and_its_points_validate(study: str) -> None:
+    directory, env, n_seeds = STUDIES[study]
+    cfg = compose_config([f"+sweep={study}"], hydra_node=True)
+    assert cfg.hydra.sweep.dir == directory and cfg.env.name == env
+    assert _swept(dict(cfg.hydra.sweeper.params)) == {"seed": [str(s) for s in range(n_seeds)]}  # tuning seeds only
+    point = ["budget.train_every=20", "budget.iters_per_train=64", "encoder.downsample=2", "encoder.pools=[2,3]"]
+    _, task = checked_config([f"+sweep={study}", *point])  # a point: the default plus overrides, validated
+    assert task.budget.max_steps == 3000 and task.budget.warmup_steps == 64 and task.encoder.downsample == 2
 
 
 @pytest.mark.parametrize("preset", sorted(PRESETS))
