@@ -196,18 +196,24 @@ def _state(pid: int) -> str:
     return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
 
 
+def _start_run(out: Path, cwd: Path, rows: int) -> subprocess.Popen:
+    """A run of ``ARGS`` into ``out`` in a child process, returned once it has written ``rows`` metrics rows."""
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    cmd = [sys.executable, "-m", "runners.train", *ARGS, "progress=false", f"hydra.run.dir={out}"]
+    proc = subprocess.Popen(cmd, cwd=cwd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.time() + 300
+    while proc.poll() is None and _rows(out / "metrics.csv") < rows and time.time() < deadline:
+        time.sleep(0.02)
+    return proc
+
+
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads process states from /proc (Linux)")
 def test_a_run_killed_with_sigkill_resumes_before_its_process_is_reaped(tmp_path: Path) -> None:
     # The killed child stays a zombie until this test reaps it; a zombie still answers kill(pid, 0), so a pid-file lock
     # refused the resume ("being written by process N"). The kernel's lock died with the process: the resume starts.
     out = tmp_path / "run"
-    env = {**os.environ, "PYTHONPATH": str(REPO)}
-    cmd = [sys.executable, "-m", "runners.train", *ARGS, "progress=false", f"hydra.run.dir={out}"]
-    proc = subprocess.Popen(cmd, cwd=tmp_path, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    proc = _start_run(out, tmp_path, rows=5)
     try:
-        deadline = time.time() + 300
-        while proc.poll() is None and _rows(out / "metrics.csv") < 5 and time.time() < deadline:
-            time.sleep(0.02)
         assert proc.poll() is None, "the run ended before it could be killed"
         os.kill(proc.pid, signal.SIGKILL)  # not proc.kill(): Popen must not reap it
         while _state(proc.pid) != "Z":
@@ -224,13 +230,8 @@ def test_a_run_killed_with_sigkill_resumes_before_its_process_is_reaped(tmp_path
 
 def test_a_live_run_s_directory_is_refused_in_one_line(tmp_path: Path) -> None:
     out = tmp_path / "run"
-    env = {**os.environ, "PYTHONPATH": str(REPO)}
-    cmd = [sys.executable, "-m", "runners.train", *ARGS, "progress=false", f"hydra.run.dir={out}"]
-    proc = subprocess.Popen(cmd, cwd=tmp_path, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    proc = _start_run(out, tmp_path, rows=2)
     try:
-        deadline = time.time() + 300
-        while proc.poll() is None and _rows(out / "metrics.csv") < 2 and time.time() < deadline:
-            time.sleep(0.02)
         assert proc.poll() is None, "the run ended before the second command"
         res = run_cli([*ARGS, f"hydra.run.dir={out}"], cwd=tmp_path)
     finally:
