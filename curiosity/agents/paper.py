@@ -265,8 +265,7 @@ class PaperAgent(Agent):
             if self.schedule.early_stop_every and done % self.schedule.early_stop_every == 0:
                 window = []
             if held_out is not None and previous is not None and self.schedule.checks_plateau(done):
-                now = self._held_out_error(held_out)
-                self.model.train()
+                now = self._held_out_error(held_out)  # evaluating() restores train mode after
                 if self.schedule.plateaued(previous, now):
                     break
                 previous = now
