@@ -8,7 +8,7 @@ import pytest
 import torch
 
 from curiosity.agents.relabel import RelabelledRewards
-from curiosity.agents.updates import build_optimizers, step
+from curiosity.agents.updates import TDTerm, build_optimizers, step, update_rule
 from curiosity.config import build, validate
 from curiosity.config.validate import ConfigError
 from tests.conftest import compose_cfg
@@ -52,6 +52,51 @@ def test_nsrs_rule_steps_the_encoder_twice_in_the_representation_step_and_again_
     assert set(joint) == {"all"} and len(joint["all"].param_groups[0]["params"]) == 6
 
 
+def _rule_parts():
+    torch.manual_seed(0)
+    enc, model, q = torch.nn.Linear(2, 2), torch.nn.Sequential(), torch.nn.Linear(2, 1)
+    model.add_module("encoder", enc)
+    model.add_module("transition", torch.nn.Linear(2, 2))
+    return enc, model, q
+
+
+@pytest.mark.parametrize("name", ["joint", "nsrs"])
+def test_an_update_rule_owns_its_steps_and_builds_losses_total_from_the_weighted_terms(name: str) -> None:
+    """Both rules log losses/total = Σ_k w_k L_k (the TD term weighted by w_q) and losses/q unweighted; joint scores the
+    TD term on the iteration's latents, nsrs re-encodes it after the representation step and skips call 1."""
+    enc, model, q = _rule_parts()
+    rule = update_rule(name, {"_target_": "torch.optim.SGD", "lr": 0.1}, model, enc, q)
+    assert rule.name == name and rule.steps_q(2) and rule.steps_q(1) == (name == "joint")
+    x = torch.ones(1, 2)
+    called: list[str] = []
+
+    def td(which: str):
+        def loss():
+            called.append(which)
+            return q(enc(x)).square().sum()
+        return loss
+
+    rep = {"transition": model.transition(enc(x)).square().sum()}
+    weights = {"transition": 2.0, "q": 0.5}
+    rep_value, q_value = rep["transition"].item(), q(enc(x)).square().sum().item()
+    logs = rule.apply(rep, weights, TDTerm(on_latents=td("on_latents"), fresh=td("fresh")))
+    assert called == (["on_latents"] if name == "joint" else ["fresh"])
+    if name == "joint":  # both terms scored before the one step
+        assert logs["losses/q"] == pytest.approx(q_value, rel=1e-6)
+        assert logs["losses/total"] == pytest.approx(2.0 * rep_value + 0.5 * q_value, rel=1e-6)
+    else:  # the Q step after the representation step: its TD loss is the re-encoded one
+        assert logs["losses/total"] == pytest.approx(2.0 * rep_value + 0.5 * logs["losses/q"], rel=1e-6)
+        assert logs["losses/q"] != pytest.approx(q_value, rel=1e-6)  # the encoder had moved
+    no_q = rule.apply({"transition": model.transition(enc(x)).square().sum()}, weights, None)
+    assert set(no_q) == {"losses/total"}
+
+
+def test_an_unknown_update_rule_is_refused_in_one_line() -> None:
+    enc, model, q = _rule_parts()
+    with pytest.raises(ValueError, match=r"agent.updates=adam: allowed: joint, nsrs"):
+        update_rule("adam", {"_target_": "torch.optim.SGD", "lr": 0.1}, model, enc, q)
+
+
 def test_relabelled_rewards_are_the_intrinsic_reward_of_every_stored_transition_after_training(one_thread) -> None:
     agent = _filled(["baseline=nsrs"])
     rel = agent.relabelled
@@ -83,7 +128,7 @@ def test_relabelled_rewards_are_the_intrinsic_reward_of_every_stored_transition_
 def test_both_rules_train_and_resume_from_a_checkpoint(overrides: list[str], one_thread) -> None:
     agent = _filled(overrides, steps=20)
     state = agent.state_dict()
-    assert ("optimizers" in state) == (agent.updates == "nsrs")
+    assert ("optimizers" in state) == (agent.rule.name == "nsrs")
     other = build(agent.cfg.baseline, cfg=agent.cfg)
     other.load_state_dict(state)
     names = sorted(agent.optimizers)

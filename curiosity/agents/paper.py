@@ -25,10 +25,9 @@ from curiosity.agents.representation import (
     encode_segments,
     representation_terms,
     term_weights,
-    total_loss,
 )
 from curiosity.agents.schedule import TrainSchedule
-from curiosity.agents.updates import Q_GRAD_CLAMP, build_optimizers, load_optimizers_state, optimizers_state, step
+from curiosity.agents.updates import TDTerm, load_optimizers_state, optimizers_state, update_rule
 from curiosity.nets.world_model import WorldModel
 from curiosity.build import build, choice
 from curiosity.envs.simulator import Simulator, SimStates
@@ -100,9 +99,9 @@ class PaperAgent(Agent):
                   if self.planner.needs_q else None)  # fmt: skip
         if self.q is not None:
             self.q.to(self.device)
-        self.updates = choice(own.updates)  # joint | nsrs (curiosity/agents/updates.py)
-        self.optimizers = build_optimizers(self.updates, own.optimizer, self.model, self.model.encoder,
-                                           self.q.q if self.q is not None else None, self.extra_terms)  # fmt: skip
+        self.rule = update_rule(choice(own.updates), own.optimizer, self.model, self.model.encoder,
+                                self.q.q if self.q is not None else None, self.extra_terms)  # fmt: skip
+        self.optimizers = self.rule.optimizers
         relabel = self.q is not None and choice(own.q_intrinsic) == "relabel"
         self.relabelled = RelabelledRewards() if relabel else None  # NSRS's stored r_int of Q targets
         self.replay = ReplayBuffer(own.replay_capacity, obs_shape_of(cfg.env), pixel_uint8=self.obs_pixels)
@@ -228,13 +227,8 @@ class PaperAgent(Agent):
                                 index=torch.tensor([self.replay.total_added - 1], device="cpu"))  # fmt: skip
         logs: dict[str, float] = dict(self._plan_logs)
         self._plan_logs = {}
-        intrinsic = self.intrinsic
-        if intrinsic.ready:
-            with torch.no_grad():
-                terms = intrinsic.compute_terms(batch)
-            logs.update({f"intrinsic/{name}": float(v.mean()) for name, v in terms.items()})
-            logs["intrinsic/reward"] = float(intrinsic.combine(terms)[0])
-        logs.update(intrinsic.observe(batch))
+        logs.update(self.intrinsic.transition_logs(batch))
+        logs.update(self.intrinsic.observe(batch))
         own_logs = {k: v for k, v in logs.items() if not k.startswith(("planner/", "probe/"))}  # act() tallied those
         self.diagnostics.tally(own_logs)
         iterations = self.schedule.iterations(step)
@@ -325,35 +319,27 @@ class PaperAgent(Agent):
         check_finite("losses/q", loss)
         return loss
 
+    def _td_fresh(self, seg: SegmentBatch, first: TransitionBatch) -> torch.Tensor:
+        """The TD loss re-encoded with the encoder as stepped so far (NSRS's Q step: z_t with gradient, z_{t+1} without)."""
+        z0 = self.model.encode(seg.obs[:, 0])
+        with torch.no_grad():
+            z1 = self.model.encode(seg.obs[:, 1])
+        return self._td_loss(z0, z1, seg, first)
+
     def _iteration(self) -> tuple[dict[str, float], float]:
-        """One gradient iteration (``agent.updates``): joint, one step on L = Σ_k w_k L_k, the representation terms and
-        the TD term of a Q-tree agent; nsrs, a representation step, then a Q step with the updated encoder."""
+        """One gradient iteration: the representation terms (and a Q-tree agent's TD term), stepped by the update rule
+        (``agent.updates``, curiosity/agents/updates.py)."""
         seg = self.replay.sample_segments(self.cfg.agent.batch_size, self.cfg.agent.n_step, self.rng).to(self.device)
         enc = encode_segments(self.model, seg)
         terms, logs = representation_terms(self.model, seg, enc, self.regulariser, self.weights, self.extra_terms)
         first = seg.first_step().with_latents(enc.z[:, 0].detach(), enc.z[:, 1].detach())
         logs.update(self.intrinsic.update(first))  # rewards that learn (ICM, RND) take their step
-        weights = term_weights(self.weights, self.extra_terms)
-        q_step = self.q is not None and (self.updates == "joint" or self.schedule.calls > 1)  # NSRS: none in call 1
-        if q_step and self.updates == "joint":  # one step on every term, the TD term included
-            terms["q"] = self._td_loss(enc.z[:, 0], enc.z[:, 1], seg, first)
-            logs["losses/q"] = terms["q"].item()
-        loss = total_loss(terms, weights)
-        check_finite("losses/total", loss)
-        if self.updates == "joint":
-            step(self.optimizers.values(), loss)
-        else:  # the representation step, then the Q step with the updated encoder
-            step((self.optimizers["encoder"], self.optimizers["model"]), loss)
-        logs["losses/total"] = loss.item()
-        if q_step and self.updates != "joint":
-            z0 = self.model.encode(seg.obs[:, 0])
-            with torch.no_grad():
-                z1 = self.model.encode(seg.obs[:, 1])
-            q_loss = weights["q"] * self._td_loss(z0, z1, seg, first)
-            step((self.optimizers["q"],), q_loss, clamp=Q_GRAD_CLAMP)
-            logs["losses/q"] = q_loss.item() / weights["q"] if weights["q"] else 0.0
-            logs["losses/total"] += q_loss.item()
-        if q_step:
+        td = None
+        if self.q is not None and self.rule.steps_q(self.schedule.calls):
+            td = TDTerm(on_latents=lambda: self._td_loss(enc.z[:, 0], enc.z[:, 1], seg, first),
+                        fresh=lambda: self._td_fresh(seg, first))  # fmt: skip
+        logs.update(self.rule.apply(terms, term_weights(self.weights, self.extra_terms), td))
+        if td is not None:
             assert self.q is not None
             self.q.after_update()
         eval_error = 0.0

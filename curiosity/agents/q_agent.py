@@ -94,10 +94,7 @@ class IntrinsicQAgent(Agent):
                                 index=torch.tensor([self.replay.total_added - 1]))  # fmt: skip
         fresh = self._with_latents(fresh)
         logs = {"q/max": self._q_max}
-        if self.intrinsic.ready:
-            terms = self.intrinsic.compute_terms(fresh)
-            logs.update({f"intrinsic/{name}": float(v.mean()) for name, v in terms.items()})
-            logs["intrinsic/reward"] = float(self.intrinsic.scale * self.intrinsic.combine(terms)[0])
+        logs.update(self.intrinsic.transition_logs(fresh))
         logs.update(self.intrinsic.observe(fresh))
         iterations = self.schedule.iterations(step)
         if iterations:

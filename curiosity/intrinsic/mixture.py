@@ -110,6 +110,18 @@ class Mixture(IntrinsicReward):
             return torch.zeros_like(next(iter(values.values())))
         return total
 
+    @torch.no_grad()
+    def transition_logs(self, batch: TransitionBatch) -> dict[str, float]:
+        """What an agent logs of a real transition (a batch of one) once the terms are ready: each term's raw bonus
+        (``intrinsic/<name>``) and the reward it learns from, ``scale`` × Σ_k w_k r_k (``intrinsic/reward``); {} before.
+        Every agent logs through this, so the logged reward means the same for all."""
+        if not self.ready:
+            return {}
+        terms = self.compute_terms(batch)
+        logs = {f"intrinsic/{name}": float(v.mean()) for name, v in terms.items()}
+        logs["intrinsic/reward"] = float(self.scale * self.combine(terms)[0])
+        return logs
+
     def compute(self, batch: TransitionBatch) -> Tensor:
         active = {name: self.terms[name].compute(batch) for name, w in self.weights.items() if w > 0}
         return self.combine(active) if active else torch.zeros(len(batch), device=batch.act.device)
