@@ -14,7 +14,7 @@ from curiosity.agents.paper import PaperAgent, build_world_model
 from curiosity.nets.world_model import WorldModel
 from curiosity.config import build
 from curiosity.intrinsic.base import IntrinsicContext
-from curiosity.intrinsic.latent_novelty import LatentNovelty
+from curiosity.intrinsic.latent_novelty import LatentNovelty, StateActionNovelty, novelty_class
 from curiosity.intrinsic.prediction_error import PredictionError
 from curiosity.novelty.estimators import KDENovelty, KNNNovelty
 from curiosity.novelty.memory import EmbeddingMemory
@@ -85,9 +85,9 @@ def _novelty(novelty_input: str, standardise: bool = False, motion_scale: float 
     cfg = compose_cfg(["env.obs=state", "encoder=mlp"])
     model = build_world_model(cfg)
     replay = ReplayBuffer(100, (6,))
-    cur = LatentNovelty(KNNNovelty(k=1, normalise=False), EmbeddingMemory(), _context(model, replay, 4),
-                        input=novelty_input, action_scale=2.0, motion_scale=motion_scale,
-                        standardise=standardise)  # fmt: skip
+    own = {"state_action": {"action_scale": 2.0}, "state_motion": {"motion_scale": motion_scale}}.get(novelty_input, {})
+    cur = novelty_class(novelty_input)(KNNNovelty(k=1, normalise=False), EmbeddingMemory(), _context(model, replay, 4),
+                                       standardise=standardise, **own)  # fmt: skip
     rng = np.random.default_rng(0)
     obs = rng.normal(size=6).astype(np.float32)
     for t in range(8):
@@ -205,8 +205,8 @@ def test_refresh_takes_the_random_phase_reference_from_the_memory() -> None:
     cfg = compose_cfg(["env.obs=state", "encoder=mlp"])
     model = build_world_model(cfg)
     replay = ReplayBuffer(100, (6,))
-    cur = LatentNovelty(KDENovelty(bandwidth=1.0, bandwidth_rule="fixed"), EmbeddingMemory(), _context(model, replay, 4),
-                        input="state_action")  # fmt: skip
+    cur = StateActionNovelty(KDENovelty(bandwidth=1.0, bandwidth_rule="fixed"), EmbeddingMemory(),
+                             _context(model, replay, 4))  # fmt: skip
     rng = np.random.default_rng(1)
     obs = rng.normal(size=6).astype(np.float32)
     for t in range(10):

@@ -309,7 +309,7 @@ class HybridConfig(MixtureConfig):
 
 @dataclass
 class LatentNoveltyTermConfig:
-    """Latent novelty (curiosity/intrinsic/latent_novelty.py): ``intrinsic.terms.novelty.<key>``."""
+    """Latent novelty (curiosity/intrinsic/latent_novelty/): ``intrinsic.terms.novelty.<key>``."""
 
     _target_: str = "curiosity.intrinsic.latent_novelty.LatentNovelty.from_context"
     estimator: Any = "${estimator}"  # the estimator group

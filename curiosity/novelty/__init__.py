@@ -3,8 +3,9 @@
 - Densities and distances over a memory: :func:`kde_log_density`, :func:`knn_distance`, :func:`nsrs_knn_score`,
   :func:`k_smallest_sq_dists` (all exact, chunked over the memory).
 - Scores: :class:`KDENoveltyReward` (random-phase baselines ``scalar`` / ``pointwise`` / ``printed`` / ``zscore`` /
-  ``none``) and the named score functions it uses. (The prediction-error bonus and the hybrid are intrinsic rewards:
-  :mod:`curiosity.intrinsic`.)
+  ``none``) and the named score functions it uses; the agents' estimators (:mod:`curiosity.novelty.estimators`, the
+  ``estimator`` group) build on it: ``KDENovelty`` is a ``KDENoveltyReward`` with a bandwidth rule. (The
+  prediction-error bonus and the hybrid are intrinsic rewards: :mod:`curiosity.intrinsic`.)
 - :class:`EmbeddingMemory`: exact or fixed-size reservoir memory with re-embedding.
 """
 

@@ -10,6 +10,11 @@ scales can be relative to the memory's own spread, recomputed at every fit:
 left out; a k-d tree finds the neighbours, so a refit costs O(N log N));
 ``bandwidth_rule=scott``: h = bandwidth × N^(−1/(D+4)) (Scott's rule; with ``standardise`` as in the precursor);
 ``bandwidth_rule=fixed``: h = bandwidth.
+
+Layers of a KDE score: :class:`~curiosity.intrinsic.latent_novelty.LatentNovelty` calls :class:`KDENovelty`, which
+is a :class:`~curiosity.novelty.rewards.KDENoveltyReward` (the random-phase baselines, as named pure functions) and
+calls :func:`~curiosity.novelty.kde.kde_log_density` itself. The kNN estimators call
+:mod:`curiosity.novelty.knn` directly.
 """
 
 from __future__ import annotations
@@ -43,8 +48,13 @@ class _Standardiser:
         return (x - self.mean) / self.std
 
 
-class KDENovelty:
-    """KDE novelty: :class:`~curiosity.novelty.rewards.KDENoveltyReward` with a bandwidth rule.
+class KDENovelty(KDENoveltyReward):
+    """KDE novelty: a :class:`~curiosity.novelty.rewards.KDENoveltyReward` (the baselines and the KDE itself, so a score
+    is one call above :func:`~curiosity.novelty.kde.kde_log_density`) whose bandwidth follows a rule and whose
+    inputs are standardised, both refitted at every :meth:`fit`.
+
+    ``bandwidth`` after construction is the fitted h (the reward's); the constructor's ``bandwidth`` is kept as
+    ``multiplier``.
 
     Args:
         bandwidth: h (``fixed``) or its multiplier (``median_nn``, ``scott``), > 0.
@@ -59,14 +69,19 @@ class KDENovelty:
                  standardise: bool = False, self_in_reference: bool = False, precision: str = "float64") -> None:  # fmt: skip
         if bandwidth_rule not in BANDWIDTH_RULES:
             raise ValueError(f"estimator.bandwidth_rule must be one of {BANDWIDTH_RULES}, got {bandwidth_rule!r}")
+        super().__init__(bandwidth=float(bandwidth), baseline=baseline, self_in_reference=self_in_reference,
+                         precision=precision)  # fmt: skip
         self.multiplier, self.rule = float(bandwidth), bandwidth_rule
-        self.reward = KDENoveltyReward(bandwidth=float(bandwidth), baseline=baseline, self_in_reference=self_in_reference,
-                                       precision=precision)  # fmt: skip
         self.standardiser = _Standardiser(standardise)
 
     @property
+    def reward(self) -> KDENoveltyReward:
+        """The reward part, which is this object itself (``estimator.reward.bandwidth`` as before the merge)."""
+        return self
+
+    @property
     def needs_reference(self) -> bool:
-        return self.reward.baseline in ("scalar", "pointwise", "printed")
+        return self.baseline in ("scalar", "pointwise", "printed")
 
     def _bandwidth(self, memory: Tensor, stream_size: int) -> float:
         if self.rule == "fixed" or len(memory) < 2:
@@ -89,35 +104,37 @@ class KDENovelty:
         stream_size)^(1/D); ``scott``: of stream_size rows), so the sample's KDE estimates the whole stream's."""
         self.standardiser.fit(memory)
         mem = self.standardiser(memory)
-        self.reward.bandwidth = self._bandwidth(mem, stream_size or len(mem))
+        self.bandwidth = self._bandwidth(mem, stream_size or len(mem))
         if self.needs_reference:
             if reference is None or len(reference) < 2:
-                raise ValueError(f"estimator.baseline={self.reward.baseline} needs the random-phase embeddings")
-            self.reward.set_reference(self.standardiser(reference))
-        self.reward.fit(mem)
+                raise ValueError(f"estimator.baseline={self.baseline} needs the random-phase embeddings")
+            self.set_reference(self.standardiser(reference))
+        super().fit(mem)
 
     def set_memory(self, memory: Tensor) -> None:
-        """Score against ``memory`` from now on, keeping the last fit's statistics."""
-        self.reward.memory = self.standardiser(memory).detach()
+        """Score against ``memory`` (N, D) from now on, keeping the last fit's statistics."""
+        self.memory = self.standardiser(memory).detach()
 
     @torch.no_grad()
     def __call__(self, query: Tensor) -> Tensor:
-        return self.reward(self.standardiser(query))
+        """Novelty of queries (B, D) -> (B,): the reward of the standardised queries."""
+        return super().__call__(self.standardiser(query))
 
     log_keys = ("intrinsic/bandwidth",)
 
     @property
     def logs(self) -> dict[str, float]:
-        return {"intrinsic/bandwidth": self.reward.bandwidth}
+        return {"intrinsic/bandwidth": self.bandwidth}
 
     def state_dict(self) -> dict[str, Any]:
-        """Fitted statistics (bandwidth, standardisation, baseline); the memory itself comes from ``set_memory``."""
-        return {"bandwidth": self.reward.bandwidth, "reward": self.reward.state_dict(),
+        """Fitted statistics: the bandwidth, the reward's (``"reward"``: reference and baseline statistics) and the
+        standardisation; the memory itself comes from ``set_memory``."""
+        return {"bandwidth": self.bandwidth, "reward": super().state_dict(),
                 "mean": self.standardiser.mean, "std": self.standardiser.std}  # fmt: skip
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
-        self.reward.bandwidth = float(state["bandwidth"])
-        self.reward.load_state_dict(state["reward"])
+        self.bandwidth = float(state["bandwidth"])
+        super().load_state_dict(state["reward"])
         self.standardiser.mean, self.standardiser.std = state["mean"], state["std"]
 
 

@@ -2,8 +2,9 @@
 
 Every score is a named pure function; :class:`KDENoveltyReward` wraps them with the state they need (reference
 statistics), takes constructor kwargs only (``hydra.utils.instantiate`` friendly) and exposes ``state_dict()`` /
-``load_state_dict()``. Scores are computed without gradient. The prediction-error bonus and the hybrid live in
-:mod:`curiosity.intrinsic`.
+``load_state_dict()``. Scores are computed without gradient. The agents' KDE estimator,
+:class:`~curiosity.novelty.estimators.KDENovelty`, is a :class:`KDENoveltyReward` with a bandwidth rule and
+standardisation. The prediction-error bonus and the hybrid live in :mod:`curiosity.intrinsic`.
 """
 
 from __future__ import annotations
