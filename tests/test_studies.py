@@ -134,3 +134,19 @@ def test_the_reference_runs_name_the_agent_keys_as_this_tree_does() -> None:
     from studies.refactor.reference_runs import agent_prefix
 
     assert agent_prefix(REPO) == "agent."  # the agent's keys live in the schema now, no longer in conf/config.yaml
+
+
+def test_the_power_study_reads_runs_and_its_seed_count_grows_as_the_margin_nears(tmp_path: Path, capsys) -> None:
+    from studies.power import main, seeds_needed
+
+    assert seeds_needed(0.2, 30, 1.10, 1.10) == float("inf")
+    assert seeds_needed(0.2, 30, 1.10, 1.0) > seeds_needed(0.2, 30, 1.10, 0.9) > 0
+    assert seeds_needed(0.2, 30, 1.10, 1.0) == pytest.approx(30 * (1.2816 * 0.2 / 0.1) ** 2, rel=1e-3)
+    for name, values in {"ref": [100, 200, 300, 400], "new": [110, None, 330, 380]}.items():
+        for seed, steps in enumerate(values):
+            run = tmp_path / name / f"seed={seed}"
+            run.mkdir(parents=True)
+            (run / "summary.json").write_text(f'{{"steps_to_goal": {"null" if steps is None else steps}, "max_steps": 3000}}')
+    assert main([str(tmp_path / "ref"), str(tmp_path / "new")]) == 0
+    out = capsys.readouterr().out
+    assert "shared seeds 4; ratio of means 3.820" in out  # (110 + 3000 + 330 + 380) / 4 over 250: the cap counts
