@@ -10,7 +10,8 @@ as in ``analysis.tables`` (a row still running is shown with the seeds it finish
 - CPU seconds per seed: median and mean, and the reference row's median over this row's (``× cheaper``);
 - the study's non-inferiority statistic against the reference row: mean(row) / mean(reference) over the seeds both
   finished, its one-sided 90 % paired-bootstrap upper bound (:func:`analysis.stats.ratio_upper_bound`: 10,000
-  resamples of the shared seeds, ``numpy.random.default_rng(0)``) and whether that bound is ≤ 1.10;
+  resamples of the shared seeds, ``numpy.random.default_rng(0)``) and whether that bound is at most the margin (1.10,
+  the cheap-seed study's; ``analysis.yaml``'s ``margin`` sets another);
 - the behaviour rates (``summary.json``'s ``behaviour``) and the probe's Spearman (``agent.means['probe/spearman']``),
   means over the seeds that record them, each column only where some run records it.
 
@@ -35,20 +36,24 @@ from analysis.claims import fmt
 from analysis.runconfig import IGNORED, flat_config
 from analysis.stats import iqm_ci, mean_se, ratio_upper_bound
 
-MARGIN = 1.10  # README rule 2: not worse when the bound of mean(point) / mean(today) is at most this
+MARGIN = 1.10  # the cheap-seed study's rule 2: not worse when the bound of mean(point) / mean(today) is at most this
 CHEAPER = 5.0  # README rule 3: the new default must be at least this many times cheaper (median CPU seconds)
 BEHAVIOUR = ("directed_rate", "repeat_rate", "tv_rate")  # summary.json's behaviour rates, in this order
 PROBE = "probe/spearman"
 EXTRA = ("cpu_seconds", *BEHAVIOUR, "probe_spearman")
-NOTE = ("Cost per seed against steps-to-goal, lower is better for both. Steps: a run that did not reach the goal "
-        "counted at its cap; SE = sample SD (ddof = 1)/√n; IQM with its 95 % percentile-bootstrap CI over seeds "
-        "(2000 resamples, seed 0). CPU s: `summary.json`'s `cpu_seconds` per seed (runs without it left out of the "
-        "CPU columns); × cheaper: the reference row's median over this row's. Ratio: mean(row) / mean(reference) "
-        "over the seeds both finished (shared); bound: its one-sided 90 % paired-bootstrap upper bound (10,000 "
-        "resamples of the shared seeds with replacement, numpy default_rng(0), 90th percentile of the resampled "
-        f"ratios); non-inferior when the bound is ≤ {MARGIN:.2f}. The study's rule applies to a point that ran all its "
-        "seeds (results/cheap_seed: 0–29); before, the column is provisional. Behaviour and probe: means over the "
-        "seeds that record them.")  # fmt: skip
+
+
+def note(margin: float = MARGIN) -> str:
+    """The cost table's caption, its rule at ``margin``."""
+    return ("Cost per seed against steps-to-goal, lower is better for both. Steps: a run that did not reach the goal "
+            "counted at its cap; SE = sample SD (ddof = 1)/√n; IQM with its 95 % percentile-bootstrap CI over seeds "
+            "(2000 resamples, seed 0). CPU s: `summary.json`'s `cpu_seconds` per seed (runs without it left out of the "
+            "CPU columns); × cheaper: the reference row's median over this row's. Ratio: mean(row) / mean(reference) "
+            "over the seeds both finished (shared); bound: its one-sided 90 % paired-bootstrap upper bound (10,000 "
+            "resamples of the shared seeds with replacement, numpy default_rng(0), 90th percentile of the resampled "
+            f"ratios); non-inferior when the bound is ≤ {margin:.2f}. The study's rule applies to a point that ran all "
+            "the seeds its README names; before, the column is provisional. Behaviour and probe: means over the "
+            "seeds that record them.")  # fmt: skip
 
 
 def summary_extras(run_dir: str | Path) -> dict[str, float]:
@@ -155,7 +160,7 @@ def _paired(g: pd.DataFrame, ref: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]
     return both["at_cap"].to_numpy(float), both["at_cap_ref"].to_numpy(float)
 
 
-def _against(g: pd.DataFrame, ref: pd.DataFrame | None, is_ref: bool) -> dict[str, Any]:
+def _against(g: pd.DataFrame, ref: pd.DataFrame | None, is_ref: bool, margin: float = MARGIN) -> dict[str, Any]:
     """The CPU ratio and the non-inferiority statistic of a row's runs ``g`` against the reference row's."""
     if ref is None or is_ref:
         return {"cpu_ratio": math.nan, "shared": 0, "ratio": math.nan, "ratio_bound": math.nan, "non_inferior": ""}
@@ -164,14 +169,14 @@ def _against(g: pd.DataFrame, ref: pd.DataFrame | None, is_ref: bool) -> dict[st
     cpu = g["cpu_seconds"].median()
     return {"cpu_ratio": float(ref["cpu_seconds"].median() / cpu) if cpu > 0 else math.nan, "shared": len(new),
             "ratio": ratio, "ratio_bound": bound,
-            "non_inferior": "" if math.isnan(bound) else ("yes" if bound <= MARGIN else "no")}  # fmt: skip
+            "non_inferior": "" if math.isnan(bound) else ("yes" if bound <= margin else "no")}  # fmt: skip
 
 
 def cost_table(runs: pd.DataFrame, reference: str, labels: dict[tuple[str, str], str],
-               unfinished: dict[tuple[str, str], str] | None = None) -> pd.DataFrame:  # fmt: skip
+               unfinished: dict[tuple[str, str], str] | None = None, margin: float = MARGIN) -> pd.DataFrame:  # fmt: skip
     """One line per (env, row) of :func:`with_extras`' runs whose row has a run recording ``cpu_seconds``, sorted; the
     reference is the one row of the env the glob ``reference`` matches (the ratio columns are empty where it matches
-    none or several: ``reference_rows``)."""
+    none or several: ``reference_rows``); a row is non-inferior when its bound is at most ``margin``."""
     out = []
     for (env, row), g in runs.groupby(["env", "row"], sort=True):
         if g["cpu_seconds"].isna().all():
@@ -190,7 +195,7 @@ def cost_table(runs: pd.DataFrame, reference: str, labels: dict[tuple[str, str],
             "not_finished": (unfinished or {}).get((str(env), str(row)), ""),
             "mean": mean, "se": se, "median": float(g["at_cap"].median()), "iqm": point, "iqm_low": low, "iqm_high": high,
             "cpu_runs": len(cpu), "cpu_median": float(cpu.median()), "cpu_mean": float(cpu.mean()),
-            **_against(g, ref, is_ref),
+            **_against(g, ref, is_ref, margin),
             **{k: float(g[k].mean()) if g[k].notna().any() else math.nan for k in (*BEHAVIOUR, "probe_spearman")},
         })  # fmt: skip
     return pd.DataFrame(out)
@@ -201,9 +206,12 @@ def _shown(table: pd.DataFrame) -> list[str]:
     return [k for k in (*BEHAVIOUR, "probe_spearman") if table[k].notna().any()]
 
 
-HEADER = ["env", "point", "reached / seeds", "not finished", "steps mean ± SE", "median", "IQM [95 % CI]",
-          "CPU s / seed: median", "mean", "× cheaper", "ratio of means", "90 % bound", f"non-inferior (≤ {MARGIN:.2f})",
-          "shared seeds"]  # fmt: skip
+def header(margin: float = MARGIN) -> list[str]:
+    return ["env", "point", "reached / seeds", "not finished", "steps mean ± SE", "median", "IQM [95 % CI]",
+            "CPU s / seed: median", "mean", "× cheaper", "ratio of means", "90 % bound", f"non-inferior (≤ {margin:.2f})",
+            "shared seeds"]  # fmt: skip
+
+
 TITLES = {"directed_rate": "directed", "repeat_rate": "repeat", "tv_rate": "TV presses", "probe_spearman": "probe ρ"}
 
 
@@ -230,30 +238,31 @@ def _reference_line(runs: pd.DataFrame, table: pd.DataFrame, reference: str) -> 
     return f"Reference `{reference}`: " + "; ".join(parts) + "."
 
 
-def to_markdown(table: pd.DataFrame, runs: pd.DataFrame, reference: str) -> str:
+def to_markdown(table: pd.DataFrame, runs: pd.DataFrame, reference: str, margin: float = MARGIN) -> str:
     """The cost table under a heading, its note, the reference row of each env and the full label of every short name."""
     extra = _shown(table)
-    head = HEADER + [TITLES[k] for k in extra]
+    head = header(margin) + [TITLES[k] for k in extra]
     lines = ["## Cost per seed", "", "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     lines += ["| " + " | ".join(c.replace("|", "\\|") for c in _cells(r, extra)) + " |"
               for r in table.itertuples(index=False)]  # fmt: skip
-    lines += ["", NOTE, "", _reference_line(runs, table, reference)]
+    lines += ["", note(margin), "", _reference_line(runs, table, reference)]
     named = [f"- {r.env} `{r.label}`: `{r.row}`" for r in table.itertuples(index=False) if r.label != r.row]
     lines += ["", "Points (short name: row label):", "", *named] if named else []
     return "\n".join(lines) + "\n"
 
 
 def write_cost(runs: pd.DataFrame, out: Path, reference: str, labels: Sequence[str] = (),
-               incomplete: pd.DataFrame | None = None) -> bool:  # fmt: skip
-    """``cost.{md,csv}`` into ``out`` for labelled runs (``analysis.rows``) when some run records ``cpu_seconds``;
-    returns whether they were written (``analysis.pareto`` then draws the same rows)."""
+               incomplete: pd.DataFrame | None = None, margin: float = MARGIN) -> bool:  # fmt: skip
+    """``cost.{md,csv}`` into ``out`` for labelled runs (``analysis.rows``) when some run records ``cpu_seconds``, a row
+    non-inferior when its bound is at most ``margin``; returns whether they were written (``analysis.pareto`` then
+    draws the same rows)."""
     runs = with_extras(runs)
     if not has_cost(runs):
         return False
     short = short_labels(runs, labels)
     unfinished = not_finished(runs, incomplete if incomplete is not None else pd.DataFrame())
-    table = cost_table(runs, reference, short, unfinished)
+    table = cost_table(runs, reference, short, unfinished, margin)
     out.mkdir(parents=True, exist_ok=True)
-    (out / "cost.md").write_text(to_markdown(table, runs, reference))
+    (out / "cost.md").write_text(to_markdown(table, runs, reference, margin))
     table.to_csv(out / "cost.csv", index=False, float_format="%.6g", lineterminator="\n")
     return True

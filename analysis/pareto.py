@@ -27,7 +27,7 @@ from analysis.cli import Options, label_option, parser, run
 from analysis.cost import CHEAPER, MARGIN, has_cost, reference_rows, with_extras
 from analysis.plotting import TEXT, RowNames, legend_outside, panels, row_names, save, styles
 from analysis.rows import label_rows, load_runs, pool_rows
-from analysis.settings import DEFAULT_REFERENCE
+from analysis.settings import DEFAULT_REFERENCE, margin_setting
 from analysis.stats import bootstrap_ci
 
 COLUMNS = ["env", "row", "label", "is_reference", "seeds", "cpu_runs", "cpu_median", "cpu_low", "cpu_high", "steps_mean",
@@ -74,7 +74,7 @@ def _point(ax: Axes, r: pd.Series, label: str, **style: object) -> None:
                 yerr=_errors(r.steps_mean, r.steps_low, r.steps_high), capsize=2, lw=1, label=label, **style)  # fmt: skip
 
 
-def _panel(ax: Axes, p: pd.DataFrame, prefix: str, names: RowNames) -> None:
+def _panel(ax: Axes, p: pd.DataFrame, prefix: str, names: RowNames, margin: float = MARGIN) -> None:
     """One env's points (legend labels after ``prefix``; the reference's first), the reference's margin and cost lines
     and the front."""
     for _, r in p[p["is_reference"]].iterrows():
@@ -85,7 +85,7 @@ def _panel(ax: Axes, p: pd.DataFrame, prefix: str, names: RowNames) -> None:
         style = names.style[r.label]
         _point(ax, r, f"{prefix}{r.label} (n={r.seeds})", fmt=style.marker, color=style.colour, ms=5)
     for _, r in p[p["is_reference"]].iterrows():
-        ax.axhline(MARGIN * r.steps_mean, color="0.3", ls=":", lw=1, label=f"{MARGIN:.2f} × the reference's mean steps")
+        ax.axhline(margin * r.steps_mean, color="0.3", ls=":", lw=1, label=f"{margin:.2f} × the reference's mean steps")
         ax.axvline(r.cpu_median / CHEAPER, color="0.5", ls="--", lw=1, label=f"{CHEAPER:g} × cheaper than the reference")
     on = p[p["on_front"]].sort_values("cpu_median")
     if len(on) > 1:
@@ -100,9 +100,10 @@ def _panel(ax: Axes, p: pd.DataFrame, prefix: str, names: RowNames) -> None:
     ax.set_title(f"{p['env'].iloc[0]} (lower left is better)")
 
 
-def plot_pareto(points: pd.DataFrame, out: Path, names: RowNames | None = None) -> list[Path]:
+def plot_pareto(points: pd.DataFrame, out: Path, names: RowNames | None = None, margin: float = MARGIN) -> list[Path]:
     """``pareto.png`` and ``pareto.pdf`` of ``points`` (:func:`pareto_points`), rows in the styles of ``names`` (by
-    default in the points' order), the legend outside the panels (:func:`analysis.plotting.legend_outside`)."""
+    default in the points' order), a line at ``margin`` × the reference's mean steps, the legend outside the panels
+    (:func:`analysis.plotting.legend_outside`)."""
     if names is None:
         short = {(str(e), str(r)): str(n) for e, r, n in zip(points["env"], points["row"], points["label"], strict=True)}
         order = list(dict.fromkeys(points["label"].astype(str)))
@@ -111,7 +112,7 @@ def plot_pareto(points: pd.DataFrame, out: Path, names: RowNames | None = None) 
     fig, axes = panels(len(envs))
     fig.set_figheight(fig.get_figheight() + 0.3)
     for ax, env in zip(axes, envs, strict=True):
-        _panel(ax, points[points["env"] == env], f"{env}: " if len(envs) > 1 else "", names)
+        _panel(ax, points[points["env"] == env], f"{env}: " if len(envs) > 1 else "", names, margin)
     handles: dict[str, object] = {}
     for ax in axes:
         for h, label in zip(*ax.get_legend_handles_labels(), strict=True):
@@ -121,22 +122,25 @@ def plot_pareto(points: pd.DataFrame, out: Path, names: RowNames | None = None) 
     return save(fig, out, "pareto")
 
 
-def write_pareto(runs: pd.DataFrame, out: Path, reference: str, labels: Sequence[str] = ()) -> list[Path]:
+def write_pareto(runs: pd.DataFrame, out: Path, reference: str, labels: Sequence[str] = (),
+                 margin: float = MARGIN) -> list[Path]:  # fmt: skip
     """``pareto.{png,pdf,csv}`` into ``out`` for labelled runs (``analysis.rows``), their rows named by ``labels``
-    (``SHORT=GLOB``); returns the files written, none when no run records ``cpu_seconds``."""
+    (``SHORT=GLOB``), the margin line at ``margin``; returns the files written, none when no run records
+    ``cpu_seconds``."""
     runs = with_extras(runs)
     if not has_cost(runs):
         return []
     names = row_names(runs, labels)
     points = pareto_points(runs, reference, names.short)
-    paths = plot_pareto(points, out, names)
+    paths = plot_pareto(points, out, names, margin)
     points.to_csv(out / "pareto.csv", index=False, float_format="%.6g", lineterminator="\n")
     return [*paths, out / "pareto.csv"]
 
 
 def pareto_from_dirs(root: Path, out: Path, reference: str, labels: Sequence[str] = (), group_by: Sequence[str] = (),
                      pools: Sequence[str] = ()) -> list[Path]:  # fmt: skip
-    """:func:`write_pareto` for the finished runs below ``root``; ValueError when none records ``cpu_seconds``."""
+    """:func:`write_pareto` for the finished runs below ``root`` (the margin from its ``analysis.yaml``, default 1.10);
+    ValueError when none records ``cpu_seconds``."""
     runs = load_runs(root)
     if runs.empty:
         raise FileNotFoundError(f"no finished run (with summary.json) below {root}")
@@ -144,7 +148,7 @@ def pareto_from_dirs(root: Path, out: Path, reference: str, labels: Sequence[str
     if not has_cost(with_extras(runs)):
         raise ValueError(f"no finished run below {root} records cpu_seconds (summary.json): no cost to plot")
     out.mkdir(parents=True, exist_ok=True)
-    return write_pareto(runs, out, reference, labels)
+    return write_pareto(runs, out, reference, labels, margin_setting(root) or MARGIN)
 
 
 def main() -> None:

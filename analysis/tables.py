@@ -28,12 +28,12 @@ import yaml
 from analysis import claims
 from analysis.cli import Options, label_option, parser, run
 from analysis.collect import load_incomplete
-from analysis.cost import parse_labels, write_cost
+from analysis.cost import MARGIN, parse_labels, write_cost
 from analysis.distractor import write_distractor_table
 from analysis.figures import load
 from analysis.pareto import write_pareto
 from analysis.rows import label_rows, load_runs, pool_rows
-from analysis.settings import DEFAULT_REFERENCE
+from analysis.settings import DEFAULT_REFERENCE, margin_setting
 from analysis.stats import iqm_ci, mean_se, per_seed_text, welch_p
 
 PAPER_NUMBERS = Path(__file__).with_name("paper_numbers.yaml")
@@ -200,6 +200,7 @@ def write_tables(root: Path, out: Path, reference: str = DEFAULT_REFERENCE, grou
     """Write ``steps_to_goal.{md,tex,csv}`` and ``incomplete.csv`` for the runs below ``root`` (and the cost table and
     figure where runs record ``cpu_seconds``, their rows named by ``labels``); returns the steps table."""
     parse_labels(labels)  # a malformed label fails before any file is written
+    margin = margin_setting(root) or MARGIN  # a bad margin too
     runs = load_runs(root)
     incomplete = _relative(load_incomplete(root), root)
     if runs.empty and incomplete.empty:
@@ -216,8 +217,8 @@ def write_tables(root: Path, out: Path, reference: str = DEFAULT_REFERENCE, grou
     if not runs.empty:
         write_curve_tables(root, out, reference, group_by, pools)
         write_distractor_table(runs, out)
-        if write_cost(rows, out, reference, labels, incomplete):
-            write_pareto(rows, out, reference, labels)
+        if write_cost(rows, out, reference, labels, incomplete, margin):
+            write_pareto(rows, out, reference, labels, margin)
     return table
 
 

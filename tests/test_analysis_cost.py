@@ -125,6 +125,27 @@ def test_the_pareto_command_reads_the_settings_and_rewrites_the_same_bytes(root:
         assert (tmp_path / name).read_bytes() == (out / name).read_bytes(), name
 
 
+def test_the_margin_setting_moves_the_rule_and_a_bad_one_is_refused_in_one_line(root: Path, tmp_path: Path) -> None:
+    """``analysis.yaml``'s ``margin`` replaces 1.10 in the rule column, its header and the caption; a margin that is
+    not a number > 0 stops the command with one line before any file is written."""
+    settings = root / "analysis.yaml"
+    settings.write_text(yaml.safe_dump({"reference": REFERENCE, "labels": LABELS, "margin": 2.5}))
+    try:
+        res = analysis("tables", root, "--out", tmp_path / "wide")
+        settings.write_text(yaml.safe_dump({"reference": REFERENCE, "margin": "wide"}))
+        bad = analysis("tables", root, "--out", tmp_path / "bad")
+    finally:
+        settings.unlink()
+    assert res.returncode == 0, res.stderr
+    table = pd.read_csv(tmp_path / "wide" / "cost.csv").set_index("label")
+    bound = table.loc["cheap"].ratio_bound
+    assert table.loc["cheap"].non_inferior == ("yes" if bound <= 2.5 else "no")
+    text = (tmp_path / "wide" / "cost.md").read_text()
+    assert "non-inferior (≤ 2.50)" in text and "non-inferior when the bound is ≤ 2.50" in text and "1.10" not in text
+    assert bad.returncode == 1 and not (tmp_path / "bad").exists()
+    assert bad.stderr.strip().splitlines()[-1].endswith("margin: 'wide' is not allowed; allowed: a number > 0")
+
+
 def test_without_cpu_seconds_there_is_no_cost_table(tmp_path: Path) -> None:
     root = tmp_path / "runs"
     for seed, steps, _cpu in TODAY:  # runs made before summary.json recorded cpu_seconds
