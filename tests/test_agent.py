@@ -217,7 +217,7 @@ def test_refresh_takes_the_random_phase_reference_from_the_memory() -> None:
     cur.refresh()
     with torch.no_grad():
         expected = cur.embed(model.encode(replay.obs_at(np.arange(4))), replay.actions_at(np.arange(4)))
-    torch.testing.assert_close(cur.estimator.reward.reference, expected)  # the first 4 transitions, re-encoded
+    torch.testing.assert_close(cur.estimator.reference, expected)  # the first 4 transitions, re-encoded
     torch.testing.assert_close(cur.memory.tensor()[:4], expected)
 
 

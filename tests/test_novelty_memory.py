@@ -156,9 +156,9 @@ def test_reservoir_bandwidth_follows_the_whole_stream():
     full.fit(data)
     corrected.fit(sample.tensor(), stream_size=sample.stands_for)
     plain.fit(sample.tensor())
-    h = full.reward.bandwidth
-    assert 0.85 <= corrected.reward.bandwidth / h <= 1.15
-    assert 1.6 <= plain.reward.bandwidth / h <= 2.0
+    h = full.bandwidth
+    assert 0.85 <= corrected.bandwidth / h <= 1.15
+    assert 1.6 <= plain.bandwidth / h <= 2.0
 
 
 def test_estimator_precision_comes_from_the_config_and_reaches_every_kde() -> None:
@@ -170,11 +170,11 @@ def test_estimator_precision_comes_from_the_config_and_reaches_every_kde() -> No
 
     fast = build(compose_config(["estimator.precision=float32"]).estimator)
     ref = build(compose_config([]).estimator)
-    assert (fast.reward.precision, ref.reward.precision) == ("float32", "float64")
+    assert (fast.precision, ref.precision) == ("float32", "float64")
     data = torch.randn(600, 4, generator=torch.Generator().manual_seed(1), dtype=torch.float64)
     query = data[:50] + 0.1 * torch.randn(50, 4, generator=torch.Generator().manual_seed(2), dtype=torch.float64)
     for est in (fast, ref):
         est.fit(data[100:], reference=data[:100])
-    assert fast.reward.log_rho0_bar.item() == pytest.approx(ref.reward.log_rho0_bar.item(), abs=1e-3)
+    assert fast.log_rho0_bar.item() == pytest.approx(ref.log_rho0_bar.item(), abs=1e-3)
     diff = (fast(query) - ref(query)).abs()
     assert 0 < diff.max().item() < 1e-3

@@ -75,11 +75,6 @@ class KDENovelty(KDENoveltyReward):
         self.standardiser = _Standardiser(standardise)
 
     @property
-    def reward(self) -> KDENoveltyReward:
-        """The reward part, which is this object itself (``estimator.reward.bandwidth`` as before the merge)."""
-        return self
-
-    @property
     def needs_reference(self) -> bool:
         return self.baseline in ("scalar", "pointwise", "printed")
 

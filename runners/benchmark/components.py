@@ -94,9 +94,9 @@ def planning_at(memory: int, repeats: int, queries: int = 2048, overrides: Seque
     exact.fit(everything)
     rng = torch.Generator().manual_seed(0)
     rows = torch.randint(len(everything), (min(queries, len(everything)),), generator=rng)
-    h = exact.reward.bandwidth
+    h = exact.bandwidth
     query = everything[rows] + 0.5 * h * torch.randn(len(rows), everything.shape[1], generator=rng)
-    err = (estimator.reward.log_density(query) - kde_log_density(query, everything, bandwidth=h)).abs()
+    err = (estimator.log_density(query) - kde_log_density(query, everything, bandwidth=h)).abs()
     out["log_rho_error_median"] = float(err.median())
     out["log_rho_error_p99"] = float(err.quantile(0.99))
     out["memory_rows"] = len(cur.memory)
