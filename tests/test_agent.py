@@ -399,3 +399,16 @@ def test_a_frozen_encoder_is_standardised_at_the_first_training_call(tmp_path: P
         tmp_path / "run")  # fmt: skip
     logdet = [float(v) for v in pd.read_csv(tmp_path / "run" / "metrics.csv")["info/latent_logdet"].dropna()]
     assert logdet and min(logdet) > -10.0
+
+
+def test_mpc_with_a_terminal_value_trains_q_per_env_step_and_scores_the_leaves(tmp_path: Path) -> None:
+    """``planner.value_coef`` > 0: the agent trains a Q (TD loss logged) discounted γ^(1/hold) per env step, the plan
+    logs the leaves' value spread, and the probe scores the value on both futures; off, there is no Q."""
+    cfg = compose_cfg([*FAST, "planner.value_coef=0.25", "agent.probe_every=8"])
+    agent = PaperAgent(cfg)
+    assert agent.q is not None and agent.q.gamma == pytest.approx(0.9**0.25)  # default hold 4
+    assert PaperAgent(compose_cfg(FAST)).q is None
+    run(cfg, tmp_path)
+    metrics = pd.read_csv(tmp_path / "metrics.csv")
+    assert metrics["losses/q"].notna().any() and metrics["planner/spread/value"].dropna().gt(0).any()
+    assert metrics["probe/spearman"].notna().any()

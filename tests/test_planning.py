@@ -291,6 +291,7 @@ def test_both_planners_are_planners_and_declare_what_they_need():
     mpc, tree = MPCPlanner(horizon=2), QTreePlanner(horizon=2)
     assert isinstance(mpc, Planner) and isinstance(tree, Planner)
     assert (mpc.needs_q, tree.needs_q) == (False, True) and mpc.horizon == tree.horizon == 2
+    assert (mpc.step_discount, tree.step_discount) == (pytest.approx(0.9), pytest.approx(0.8))
     with pytest.raises(ValueError, match="needs a Q-function"):
         tree.plan(PlanRequest(torch.zeros(1), path_step, lambda z, a, zn: torch.zeros(zn.shape[0])))
     named = {"a": lambda z, a, zn: path_novelty(zn), "b": lambda z, a, zn: torch.zeros(zn.shape[0], dtype=zn.dtype)}
@@ -300,3 +301,47 @@ def test_both_planners_are_planners_and_declare_what_they_need():
 
     request = PlanRequest(torch.zeros(1, dtype=torch.float64), path_step, terms, q_fn=zero_q)
     assert tree.plan(request).action == 2  # named terms are summed, as one tensor would be
+
+
+def test_mpc_terminal_value_adds_the_leaves_q_by_brute_force_and_changes_the_choice():
+    """``value_coef`` κ: Ĝ + κ γ^H max_a Q(ŝ_H, a) at the held rollout's leaf, on random nets (tolerance: float64 sums
+    in another order); a Q that pays for a high leaf turns the plan from the reward's best to the leaf's."""
+    torch.manual_seed(0)
+    model = ResidualTransition(2, 3, dropout=0.0).double().eval()
+    q_net = QNetwork(2, 3).double().eval()
+
+    def step(z, a):
+        return model(z, one_hot(a, 3).double())
+
+    def intrinsic(z, a, z_next):
+        return torch.cos(z_next).sum(1)
+
+    planner = MPCPlanner(horizon=3, gamma=0.8, eta=0.7, temperature=0.0, hold=2, value_coef=0.5)
+    assert planner.needs_q and planner.step_discount == pytest.approx(0.8**0.5)
+    z0 = torch.randn(2, dtype=torch.float64)
+    seqs = planner.candidates()
+    with torch.no_grad():
+        base = held_brute_force_returns(z0, seqs, step, toy_reward, intrinsic, 0.8, 0.7, 2)
+        leaves = []
+        for seq in seqs.tolist():
+            z = z0.unsqueeze(0)
+            for a in seq:
+                for _ in range(2):
+                    z = step(z, torch.tensor([a]))
+            leaves.append(float(q_net(z).max()))
+        expected = base + 0.5 * 0.8**3 * torch.tensor(leaves, dtype=torch.float64)
+        terms = planner.score_terms(z0, seqs, step, toy_reward, intrinsic, q_fn=q_net)
+        torch.testing.assert_close(terms["value"], expected - base)
+        torch.testing.assert_close(planner.scores(z0, seqs, step, toy_reward, intrinsic, q_fn=q_net), expected)
+    with pytest.raises(ValueError, match="needs a Q-function"):
+        planner.scores(z0, seqs, step, toy_reward, intrinsic)
+    # on the toy model action 0 raises the latent; a Q paying 100 per unit of leaf latent outweighs the bonus path
+    toy = MPCPlanner(horizon=3, gamma=0.9, temperature=0.0, value_coef=1.0)
+    request = PlanRequest(torch.tensor([0.5], dtype=torch.float64), toy_step, zero_intrinsic, toy_reward)
+    assert MPCPlanner(horizon=3, gamma=0.9, temperature=0.0).plan(request).sequence == [0, 2, 2]
+    request.q_fn = lambda z: 100.0 * z.repeat(1, 3)
+    plan = toy.plan(request)
+    assert plan.sequence == [0, 0, 0] and "spread/value" in plan.info
+    assert not MPCPlanner(horizon=3).needs_q
+    with pytest.raises(ValueError, match=r"planner\.value_coef"):
+        MPCPlanner(horizon=3, value_coef=-1.0)

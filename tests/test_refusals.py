@@ -67,7 +67,7 @@ OUT_OF_RANGE = dict([
     _out_of_range("backward.hidden", "0"), _out_of_range("planner.horizon", "0"), _out_of_range("planner.gamma", "1.5"),
     _out_of_range("planner.temperature", "-1"), _out_of_range("planner.eta", "-1"),
     _out_of_range("planner.max_candidates", "0"), _out_of_range("planner.commit", "0"),
-    _out_of_range("planner.hold", "0"),
+    _out_of_range("planner.hold", "0"), _out_of_range("planner.value_coef", "-1"),
     _out_of_range("encoder.hidden", "[64,0]", *MLP),
     _out_of_range("baseline.epsilon", "2", *ICM), _out_of_range("baseline.gamma", "-0.5", *RND),
     _out_of_range("intrinsic.terms.icm.lr", "0", *ICM), _out_of_range("intrinsic.terms.icm.eta", "-1", *ICM),

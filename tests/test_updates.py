@@ -174,3 +174,8 @@ def test_the_adaptive_schedule_stops_a_call_once_the_held_out_error_plateaus(one
     assert held.index is not None and held.index.tolist() == list(range(14))  # the newest transitions
     full = _filled(["budget.plateau_every=0"], steps=14)
     assert full._train(40)["train/iterations"] == 40.0  # off: every call runs its iterations
+
+
+def test_relabelled_q_targets_are_allowed_with_mpcs_terminal_value() -> None:
+    """MPC with a terminal value has a Q, so NSRS's relabelled intrinsic rewards may feed its targets."""
+    validate(compose_cfg(["agent.q_intrinsic=relabel", "planner.value_coef=0.25"]))

@@ -18,7 +18,7 @@ from torch import Tensor
 
 from curiosity.envs.simulator import SimStates
 from curiosity.planning.probe import probe_keys, probe_model
-from curiosity.planning.protocols import IntrinsicFn, Planner, ScoreFn
+from curiosity.planning.protocols import IntrinsicFn, Planner, QFn, ScoreFn
 from curiosity.planning.rollout import StepFn
 
 # run means of these planner/probe/memory columns go to summary.json ("agent")
@@ -40,6 +40,7 @@ class PlanView:
         stochastic: whether those terms draw noise (MC dropout), so that two evaluations differ.
         root: the real simulator's state at this observation (for the probe), made on demand.
         encode: E(o) -> z for the probe's true futures.
+        q_fn: Q(z (M, d)) -> (M, A), the leaves' value of a planner with a terminal value, or None.
     """
 
     z0: Tensor
@@ -49,6 +50,7 @@ class PlanView:
     stochastic: bool
     root: Callable[[], SimStates]
     encode: Callable[[Tensor], Tensor]
+    q_fn: QFn | None = None
 
 
 class PlanDiagnostics:
@@ -97,7 +99,8 @@ class PlanDiagnostics:
         if not self.noise or not view.stochastic or planner.n_actions**planner.horizon > planner.max_candidates:
             return {}
         seqs = planner.candidates()
-        g1, g2 = (planner.scores(view.z0, seqs, view.step_fn, view.reward_fn, view.intrinsic) for _ in range(2))
+        g1, g2 = (planner.scores(view.z0, seqs, view.step_fn, view.reward_fn, view.intrinsic, q_fn=view.q_fn)
+                  for _ in range(2))  # fmt: skip
         flip = int(seqs[int(g1.argmax()), 0]) != int(seqs[int(g2.argmax()), 0])
         return {"planner/noise": float((g1 - g2).std(correction=0)) / 2**0.5, "planner/noise_flip": float(flip)}
 
@@ -107,7 +110,7 @@ class PlanDiagnostics:
         assert self.simulator is not None, "attach_env() was not called"
         start = time.perf_counter()
         out = probe_model(self.planner, view.z0, view.step_fn, view.reward_fn, view.intrinsic, self.simulator,
-                          view.root(), view.encode)  # type: ignore[arg-type]  # fmt: skip
+                          view.root(), view.encode, view.q_fn)  # type: ignore[arg-type]  # fmt: skip
         out["timing/probe_ms"] = 1e3 * (time.perf_counter() - start)
         return out
 

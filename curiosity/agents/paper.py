@@ -94,7 +94,8 @@ class PaperAgent(Agent):
         self.extra_terms = torch.nn.ModuleDict({name: build(node, latent_dim=int(own.internal_dim), n_actions=self.n_actions)
                                                 for name, node in own.extra_terms.items()}).to(self.device)  # fmt: skip
         self.planner: Planner = build(cfg.planner)
-        self.q = (QLearner(self.model.encoder, own.internal_dim, self.n_actions, gamma=cfg.planner.gamma,
+        self._leaf_value = bool(getattr(self.planner, "value_coef", 0.0))  # MPC with a terminal value Q of the leaf
+        self.q = (QLearner(self.model.encoder, own.internal_dim, self.n_actions, gamma=self.planner.step_discount,
                            target_every=own.q_target_every, huber=own.q_huber)
                   if self.planner.needs_q else None)  # fmt: skip
         if self.q is not None:
@@ -124,7 +125,9 @@ class PaperAgent(Agent):
                                            learned=not self.oracle)  # fmt: skip
         first = tuple(f"planner/p_first/{a}" for a in range(self.n_actions))
         probe = self.diagnostics.keys
-        spread = tuple(f"planner/spread/{name}" for name in self.intrinsic.terms)  # each term's spread across candidates
+        # each term's spread across candidates (and the leaves' value's, with MPC's terminal value)
+        spread = tuple(f"planner/spread/{name}"
+                       for name in (*self.intrinsic.terms, *(("value",) if self._leaf_value else ())))  # fmt: skip
         extra_keys = tuple(f"losses/{name}" for name in self.extra_terms)
         self.metric_keys = (*LOSS_KEYS, *extra_keys, *self.intrinsic.log_keys, *AGENT_KEYS, *spread, *first, *probe)
         self._plan_logs: dict[str, float] = {}
@@ -204,7 +207,8 @@ class PaperAgent(Agent):
             logs.update({f"planner/{k}": v for k, v in plan.info.items()
                          if k.startswith(("spread/", "p_first/")) or k == "first_action_entropy"})  # fmt: skip
             view = PlanView(z0, self.model.next, self._reward_fn(), self.intrinsic.imagined_terms,
-                            self.intrinsic.stochastic, lambda: self._root(obs), self.model.encode)  # fmt: skip
+                            self.intrinsic.stochastic, lambda: self._root(obs), self.model.encode,
+                            self.q.values if self.q is not None else None)  # fmt: skip
             logs.update(self.diagnostics.after_plan(view, step))
         self.diagnostics.tally(logs)
         self._plan_logs = logs

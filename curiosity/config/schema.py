@@ -269,6 +269,9 @@ class MPCConfig:
     # env steps each planned action is held for: H actions look H x hold steps ahead, A^H candidates; commit counts
     # held actions (1: one action per step, the text's reading; 4: the agent study's, with encoder=conv_blur)
     hold: int = 4
+    # > 0: a terminal value, value_coef x gamma^H x max_a Q(leaf, a), with a Q trained on r_ext + r_int of replayed
+    # transitions (NSRS's, TD-MPC's value beyond the horizon; not the paper's); Q discounts gamma^(1/hold) per env step
+    value_coef: float = 0.0
 
 
 @dataclass

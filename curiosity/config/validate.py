@@ -80,6 +80,7 @@ RULES: list[Rule] = [
     ("planner.max_candidates", lambda v: v >= 1, "an integer >= 1"),
     ("planner.commit", lambda v: v >= 1, "an integer >= 1 (1: plan at every step)"),
     ("planner.hold", lambda v: v >= 1, "an integer >= 1 (1: every env step its own action)"),
+    ("planner.value_coef", lambda v: v >= 0, "a number >= 0 (0: no terminal value)"),
     ("agent.transition_ensemble", lambda v: v >= 1, "an integer >= 1 (1: one transition model)"),
     ("intrinsic.terms.novelty.refresh_drift", lambda v: v >= 0, "a number >= 0 (0: refresh on the schedule only)"),
     ("intrinsic.terms.novelty.target_dim", lambda v: v >= 1, "an integer >= 1"),
@@ -157,9 +158,10 @@ def _cross_field_errors(cfg: DictConfig) -> list[str]:
             if str(choice(cfg.agent[key])) != ours:
                 errors.append(f"agent.{key}={choice(cfg.agent[key])}: only the paper's agent and NSRS read it, not "
                               f"baseline={cfg.baseline.name}; allowed: agent.{key}={ours}")  # fmt: skip
-    elif choice(cfg.agent.q_intrinsic) == "relabel" and cfg.planner.name != "qtree":
+    elif (choice(cfg.agent.q_intrinsic) == "relabel" and cfg.planner.name != "qtree"
+          and not OmegaConf.select(cfg, "planner.value_coef", default=0)):  # fmt: skip
         errors.append(f"agent.q_intrinsic=relabel: rescored rewards feed Q targets, and planner={cfg.planner.name} has no "
-                      "Q; allowed: agent.q_intrinsic=batch, or planner=qtree")  # fmt: skip
+                      "Q; allowed: agent.q_intrinsic=batch, or planner=qtree, or planner.value_coef > 0")  # fmt: skip
     errors += _encoder_layout_errors(cfg)
     random_dim = OmegaConf.select(cfg, "encoder.random_dim", default=None)
     if random_dim is not None and not 1 <= random_dim < cfg.agent.internal_dim:

@@ -7,7 +7,7 @@ from typing import ClassVar
 import torch
 from torch import Tensor
 
-from curiosity.planning.protocols import IntrinsicFn, Plan, PlanRequest, ScoreFn
+from curiosity.planning.protocols import IntrinsicFn, Plan, PlanRequest, QFn, ScoreFn
 from curiosity.planning.rollout import LatentRollout, Rollout, StepFn, held
 
 TEMPERATURE_SCALES = ("absolute", "spread")
@@ -16,6 +16,11 @@ PLANNER_MODELS = ("learned", "oracle")
 
 class MPCPlanner:
     """Score action sequences by Ĝ = Σ_{i<H} γ^i [R(ŷ_i) + η r_int(ŷ_i)], ŷ_i = [ŝ_i, a_i], sample one ∝ exp(Ĝ/τ).
+
+    With a terminal value (``value_coef`` κ > 0, not in the paper: TD-MPC's value beyond the horizon, with NSRS's Q),
+    Ĝ gains κ γ^H max_a Q(ŝ_H, a), the value of the leaf; the agent then trains Q on replayed transitions
+    (``needs_q``), discounted per env step by :attr:`step_discount` = γ^(1/hold), so the leaf's γ^H is the exact
+    discount of the H × hold env steps before it.
 
     ŝ_0 = z0 and ŝ_{i+1} = T(ŝ_i, a_i): the reward term is scored on the (latent, action) pair before stepping, the
     intrinsic term on the edge (ŝ_i, a_i, ŝ_{i+1}) (state novelty scores the state reached). Candidates are all A^H
@@ -40,6 +45,8 @@ class MPCPlanner:
             rendered and encoded: the upper bound a learned model is measured against). The agent builds the rollout.
         commit: how many actions of the chosen sequence the agent executes before it plans again (1: replan at every
             step, receding horizon); the agent executes that many actions of :attr:`Plan.sequence` (× ``hold``).
+        value_coef: κ, the weight of the leaf's value κ γ^H max_a Q(ŝ_H, a) (0: no terminal value, no Q). Q sums a
+            reward per env step and a depth of the plan one per held action: κ = 1/hold puts them on one scale.
         hold: env steps each action of a candidate is held for (1: every step its own action). A candidate is still
             H actions (A^H candidates), but it looks H × hold steps ahead; each depth's terms are scored once, on
             the edge from the latent before the held action to the latent after it. :attr:`Plan.sequence` holds the
@@ -47,7 +54,6 @@ class MPCPlanner:
     """
 
     scores_candidates: ClassVar[bool] = True  # scores an explicit candidate set (candidates(), scores())
-    needs_q: ClassVar[bool] = False
 
     def __init__(
         self,
@@ -62,6 +68,7 @@ class MPCPlanner:
         model: str = "learned",
         commit: int = 1,
         hold: int = 1,
+        value_coef: float = 0.0,
     ) -> None:
         if not 1 <= commit <= horizon:
             raise ValueError(f"planner.commit must be in [1, planner.horizon={horizon}], got {commit}")
@@ -86,6 +93,19 @@ class MPCPlanner:
         if model not in PLANNER_MODELS:
             raise ValueError(f"planner.model must be one of {PLANNER_MODELS}, got {model!r}")
         self.temperature_scale, self.model = temperature_scale, model
+        if value_coef < 0:
+            raise ValueError(f"planner.value_coef must be >= 0 (0: no terminal value), got {value_coef}")
+        self.value_coef = float(value_coef)
+
+    @property
+    def needs_q(self) -> bool:
+        """Whether the agent must train a Q-function (a terminal value, ``value_coef`` > 0)."""
+        return self.value_coef > 0
+
+    @property
+    def step_discount(self) -> float:
+        """The discount per env step of a Q-function whose values are the plan's leaves: γ^(1/hold)."""
+        return float(self.gamma ** (1.0 / self.hold))
 
     def candidates(self, generator: torch.Generator | None = None) -> Tensor:
         """Candidate action sequences.
@@ -109,6 +129,7 @@ class MPCPlanner:
         reward_fn: ScoreFn | None,
         intrinsic_fn: IntrinsicFn,
         rollout: Rollout | None = None,
+        q_fn: QFn | None = None,
     ) -> dict[str, Tensor]:
         """Discounted returns of each sequence, term by term; Ĝ is their sum.
 
@@ -122,11 +143,14 @@ class MPCPlanner:
             rollout: where the futures come from (:mod:`curiosity.planning.rollout`); default the learned model. Each
                 expand covers ``hold`` env steps (a one-step rollout is wrapped in a
                 :class:`~curiosity.planning.rollout.HeldRollout`).
+            q_fn: Q(z (M, d)) -> (M, A); with ``value_coef`` > 0 it values the leaves (required then), else unused.
 
         Returns:
-            term name -> (N,) Σ_i γ^i term_i: ``reward`` (R), and η × each intrinsic term (``intrinsic`` when
-            ``intrinsic_fn`` returns one tensor).
+            term name -> (N,) Σ_i γ^i term_i: ``reward`` (R), η × each intrinsic term (``intrinsic`` when
+            ``intrinsic_fn`` returns one tensor) and, with a terminal value, ``value``: κ γ^H max_a Q(ŝ_H, a).
         """
+        if self.needs_q and q_fn is None:
+            raise ValueError(f"planner.value_coef={self.value_coef}: the terminal value needs a Q-function (q_fn)")
         seqs = seqs.to(z0.device)
         rollout = held(LatentRollout(z0, step_fn) if rollout is None else rollout, self.hold)
         node = torch.zeros(seqs.shape[0], dtype=torch.long, device=z0.device)
@@ -145,12 +169,15 @@ class MPCPlanner:
                 previous = terms.get(key, torch.zeros(seqs.shape[0], dtype=z0.dtype, device=z0.device))
                 terms[key] = previous + self.gamma**i * value[child]
             node = child
+        if self.needs_q and q_fn is not None:
+            leaf = q_fn(rollout.latents()).max(dim=1).values  # one value per distinct leaf
+            terms["value"] = self.value_coef * self.gamma ** seqs.shape[1] * leaf[node]
         return terms
 
     def scores(self, z0: Tensor, seqs: Tensor, step_fn: StepFn, reward_fn: ScoreFn | None, intrinsic_fn: IntrinsicFn,
-               rollout: Rollout | None = None) -> Tensor:  # fmt: skip
+               rollout: Rollout | None = None, q_fn: QFn | None = None) -> Tensor:  # fmt: skip
         """Ĝ of each sequence, (N,): the sum of :meth:`score_terms` (same arguments)."""
-        return _total(self.score_terms(z0, seqs, step_fn, reward_fn, intrinsic_fn, rollout))
+        return _total(self.score_terms(z0, seqs, step_fn, reward_fn, intrinsic_fn, rollout, q_fn))
 
     def choose(self, returns: Tensor, generator: torch.Generator | None = None) -> tuple[int, Tensor, float]:
         """Index of the chosen sequence, the (N,) choice probabilities, and their entropy in nats.
@@ -179,7 +206,8 @@ class MPCPlanner:
         """Choose a sequence drawn from softmax(Ĝ/τ) (argmax for τ ≤ 0) at ``request.z0``.
 
         Reads ``z0``, ``step_fn``, ``reward_fn``, ``intrinsic`` (one tensor, or named terms, see :meth:`score_terms`),
-        ``generator`` (candidate sampling and the softmax draw; CPU) and ``rollout``.
+        ``generator`` (candidate sampling and the softmax draw; CPU), ``rollout`` and, with a terminal value,
+        ``q_fn``.
 
         Returns:
             the chosen sequence (each action repeated ``hold`` times), its Ĝ, and info keys ``best_score``,
@@ -190,7 +218,7 @@ class MPCPlanner:
         with torch.no_grad():
             seqs = self.candidates(request.generator)
             terms = self.score_terms(request.z0, seqs, request.step_fn, request.reward_fn, request.intrinsic,
-                                     request.rollout)  # fmt: skip
+                                     request.rollout, request.q_fn)  # fmt: skip
             returns = _total(terms)
             index, probs, entropy = self.choose(returns, request.generator)
             first = self.first_action_probs(seqs, probs)

@@ -10,7 +10,7 @@ With ``planner.hold`` > 1 a depth is that many env steps (each action held), as 
     predicted (``effect_pred/k``) and true (``effect_true/k``), their ratio (``effect_ratio/k``; 1 is right, 0 is a
     model that ignores the action), and the RMS error of the predicted latents (``error/k``);
 (b) the Spearman rank correlation between the planner's scores Ĝ of every candidate sequence computed on the
-    model's futures and on the true futures (``spearman``);
+    model's futures and on the true futures (``spearman``; a terminal value, Q of the leaf, is in both);
 (c) whether the first action of the best sequence is the same under both (``agree``, 1 or 0).
 """
 
@@ -24,7 +24,7 @@ from torch import Tensor
 
 from curiosity.envs.simulator import Simulator, SimStates
 from curiosity.planning.mpc import MPCPlanner
-from curiosity.planning.protocols import IntrinsicFn, ScoreFn
+from curiosity.planning.protocols import IntrinsicFn, QFn, ScoreFn
 from curiosity.planning.rollout import LatentRollout, ReplayRollout, Rollout, SimulatorRollout, StepFn, held
 
 
@@ -55,7 +55,8 @@ def probe_keys(horizon: int) -> tuple[str, ...]:
 
 @torch.no_grad()
 def probe_model(planner: MPCPlanner, z0: Tensor, step_fn: StepFn, reward_fn: ScoreFn | None, intrinsic_fn: IntrinsicFn,
-                simulator: Simulator, root: SimStates, encode: Callable[[Tensor], Tensor]) -> dict[str, float]:  # fmt: skip
+                simulator: Simulator, root: SimStates, encode: Callable[[Tensor], Tensor],
+                q_fn: QFn | None = None) -> dict[str, float]:  # fmt: skip
     """Probe the model at one state (see the module docstring).
 
     Args:
@@ -66,6 +67,7 @@ def probe_model(planner: MPCPlanner, z0: Tensor, step_fn: StepFn, reward_fn: Sco
         intrinsic_fn: the planner's r_int(z, a, z_next) (a tensor or named terms).
         simulator: the run env's simulator; ``root`` the state to branch from.
         encode: observations (M, *obs_shape) -> latents (M, d), in eval mode.
+        q_fn: the leaves' value Q(z (M, d)) -> (M, A) of a planner with a terminal value, or None.
 
     Returns:
         ``probe/...`` metrics (:func:`probe_keys`); a ratio or correlation that is undefined (a zero true effect,
@@ -82,10 +84,10 @@ def probe_model(planner: MPCPlanner, z0: Tensor, step_fn: StepFn, reward_fn: Sco
         if effect_true > 0:
             out[f"probe/effect_ratio/{k}"] = effect_pred / effect_true
     seqs = planner.candidates(torch.Generator(device="cpu").manual_seed(0))
-    g_model = planner.scores(z0, seqs, step_fn, reward_fn, intrinsic_fn).cpu().numpy()
+    g_model = planner.scores(z0, seqs, step_fn, reward_fn, intrinsic_fn, q_fn=q_fn).cpu().numpy()
     full = len(seqs) == a**h  # all sequences: score the true tree above again instead of simulating it twice
     replay = ReplayRollout(z0, true, planner.hold) if full else SimulatorRollout(simulator, root, z0, encode)
-    g_true = planner.scores(z0, seqs, step_fn, reward_fn, intrinsic_fn, rollout=replay).cpu().numpy()
+    g_true = planner.scores(z0, seqs, step_fn, reward_fn, intrinsic_fn, rollout=replay, q_fn=q_fn).cpu().numpy()
     if np.ptp(g_model) > 0 and np.ptp(g_true) > 0:
         from scipy.stats import spearmanr  # on first use: importing scipy.stats takes ~1 s
 

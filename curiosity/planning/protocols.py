@@ -68,12 +68,13 @@ class Plan:
 class Planner(Protocol):
     """Chooses actions by searching imagined futures of the latent model."""
 
-    needs_q: ClassVar[bool]  # whether the agent must train a Q-function and pass it as ``PlanRequest.q_fn``
+    needs_q: bool  # whether the agent must train a Q-function and pass it as ``PlanRequest.q_fn``
     # whether it scores an explicit set of candidate sequences (``candidates()``, ``scores(...)``), which the agent's
     # diagnostics (score noise, the model probe) re-score
     scores_candidates: ClassVar[bool]
     horizon: int  # how many steps ahead it looks
     commit: int  # how many actions of a plan the agent executes before planning again (1 <= commit <= len(sequence))
+    step_discount: float  # the discount per env step of the Q-function a planner with ``needs_q`` reads
 
     def plan(self, request: PlanRequest) -> Plan:
         """Choose a sequence of actions at ``request.z0``."""

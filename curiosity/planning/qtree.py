@@ -43,6 +43,11 @@ class QTreePlanner:
         self.gamma = gamma
         self.n_actions = n_actions
 
+    @property
+    def step_discount(self) -> float:
+        """The discount per env step of the Q at the leaves: γ (each depth is one env step)."""
+        return float(self.gamma)
+
     def expand(self, z: Tensor, step_fn: StepFn) -> Tensor:
         """All children of a level, state-major.
 
