@@ -36,6 +36,7 @@ from curiosity.intrinsic.latent_novelty import LatentNovelty
 from curiosity.intrinsic.mixture import Mixture
 from curiosity.nets.backward import BackwardPredictor
 from curiosity.nets.encoders import FixedStandardiser
+from curiosity.nets.polyak import PolyakCopy
 from curiosity.nets.reward import RewardModel
 from curiosity.nets.transition import ResidualTransition, TransitionEnsemble
 from curiosity.planning.protocols import Plan, Planner, PlanRequest
@@ -87,6 +88,9 @@ class PaperAgent(Agent):
         self.model = build_world_model(cfg).to(self.device)
         self.regulariser = build(cfg.entropy)
         own = cfg.agent
+        # agent.target_tau > 0: the transition loss's targets come from a slowly moving copy of the encoder (TD-MPC)
+        tau = float(OmegaConf.select(cfg, "agent.target_tau", default=0.0))
+        self.target_encoder = PolyakCopy(self.model.encoder, tau).to(self.device) if tau > 0 else None
         self.weights = LossWeights(transition=own.transition_coef, reward=own.reward_coef, backward=cfg.backward.coef,
                                    q=own.q_coef, sigma_b=cfg.backward.sigma_b, normalised_transition=own.normalised_transition,
                                    detach_targets=own.detach_targets)  # fmt: skip
@@ -334,7 +338,7 @@ class PaperAgent(Agent):
         """One gradient iteration: the representation terms (and a Q-tree agent's TD term), stepped by the update rule
         (``agent.updates``, curiosity/agents/updates.py)."""
         seg = self.replay.sample_segments(self.cfg.agent.batch_size, self.cfg.agent.n_step, self.rng).to(self.device)
-        enc = encode_segments(self.model, seg)
+        enc = encode_segments(self.model, seg, self.target_encoder)
         terms, logs = representation_terms(self.model, seg, enc, self.regulariser, self.weights, self.extra_terms)
         first = seg.first_step().with_latents(enc.z[:, 0].detach(), enc.z[:, 1].detach())
         logs.update(self.intrinsic.update(first))  # rewards that learn (ICM, RND) take their step
@@ -343,6 +347,8 @@ class PaperAgent(Agent):
             td = TDTerm(on_latents=lambda: self._td_loss(enc.z[:, 0], enc.z[:, 1], seg, first),
                         fresh=lambda: self._td_fresh(seg, first))  # fmt: skip
         logs.update(self.rule.apply(terms, term_weights(self.weights, self.extra_terms), td))
+        if self.target_encoder is not None:
+            self.target_encoder.update()
         if td is not None:
             assert self.q is not None
             self.q.after_update()
@@ -362,6 +368,7 @@ class PaperAgent(Agent):
             "totals": self.diagnostics.state_dict(),
             "queue": list(self.queue),
             **({"extra_terms": self.extra_terms.state_dict()} if len(self.extra_terms) else {}),
+            **({"target_encoder": self.target_encoder.state_dict()} if self.target_encoder is not None else {}),
             **({"relabelled": self.relabelled.state_dict()} if self.relabelled is not None else {}),
         }  # fmt: skip
 
@@ -372,6 +379,8 @@ class PaperAgent(Agent):
             self.extra_terms.load_state_dict(state["extra_terms"])
         if self.q is not None:
             self.q.load_state_dict(state["q"])
+        if self.target_encoder is not None:
+            self.target_encoder.load_state_dict(state["target_encoder"])
         load_optimizers_state(self.optimizers, state)
         if self.relabelled is not None:
             self.relabelled.load_state_dict(state["relabelled"])

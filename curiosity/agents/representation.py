@@ -86,17 +86,23 @@ def total_loss(terms: Mapping[str, Tensor], weights: Mapping[str, float]) -> Ten
 
 @dataclass
 class Encoded:
-    """Latents of a segment batch: z (B, n + 1, d) and one-hot actions (B, n, A)."""
+    """Latents of a segment batch: z (B, n + 1, d), one-hot actions (B, n, A) and, with a target encoder, the
+    transition loss's targets (B, n, d) of o_{t+1} .. o_{t+n} (else None: the targets are z[:, 1:])."""
 
     z: Tensor
     a1h: Tensor
+    targets: Tensor | None = None
 
 
-def encode_segments(model: WorldModel, seg: SegmentBatch) -> Encoded:
-    """Encode every observation of the segments in one pass: (B, n + 1, *obs) -> (B, n + 1, d)."""
+def encode_segments(model: WorldModel, seg: SegmentBatch, target: Callable[[Tensor], Tensor] | None = None) -> Encoded:
+    """Encode every observation of the segments in one pass: (B, n + 1, *obs) -> (B, n + 1, d); with ``target`` (a
+    slowly moving copy of the encoder, no gradient) also the targets of o_{t+1} .. o_{t+n}, (B, n, d)."""
     b, n1 = seg.obs.shape[:2]
     z = model.encode(seg.obs.reshape(b * n1, *seg.obs.shape[2:])).reshape(b, n1, -1)
-    return Encoded(z=z, a1h=one_hot(seg.act, model.n_actions).to(z.dtype))
+    targets = None
+    if target is not None:
+        targets = target(seg.obs[:, 1:].reshape(b * (n1 - 1), *seg.obs.shape[2:])).reshape(b, n1 - 1, -1)
+    return Encoded(z=z, a1h=one_hot(seg.act, model.n_actions).to(z.dtype), targets=targets)
 
 
 def representation_terms(
@@ -105,14 +111,18 @@ def representation_terms(
 ) -> tuple[dict[str, Tensor], dict[str, float]]:
     """The representation loss's named terms for one batch (each checked finite), and their values as floats.
 
-    Terms: ``transition`` (n-step, averaged over an ensemble's members), ``entropy`` (the regulariser on the first
+    Terms: ``transition`` (n-step, averaged over an ensemble's members; its targets are ``enc.targets`` when a target
+    encoder made them, else z_{t+1} .. z_{t+n}, detached with ``w.detach_targets``), ``entropy`` (the regulariser on the first
     transition of each segment, (z_t, a_t, z_{t+1}), weighted inside), ``reward`` (with a reward model and
     λ_R > 0), ``backward`` (with a backward predictor and λ_back > 0), then each plug-in of ``extra`` under its
     name (:class:`LossTerm`; weighted by :func:`term_weights`). Logs: ``losses/<term>``, the regulariser's own
     diagnostics, and ``info/latent_logdet``, the common yardstick :func:`~curiosity.info.latent_logdet` of z_{t+1}.
     """
     z, a1h = enc.z, enc.a1h
-    targets = z[:, 1:].detach() if w.detach_targets else z[:, 1:]
+    if enc.targets is not None:  # a target encoder's (agent.target_tau > 0)
+        targets = enc.targets
+    else:
+        targets = z[:, 1:].detach() if w.detach_targets else z[:, 1:]
     members = model.transition.members  # an ensemble trains each member on its own loss
     terms = {"transition": sum(nstep_transition_loss(z[:, 0], a1h, targets, seg.terminateds, member,
                                                      normalised=w.normalised_transition)

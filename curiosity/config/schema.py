@@ -442,6 +442,9 @@ class AgentKeysConfig:
     normalised_transition: bool = False  # the normalised variant of L_trans (paper Eq. 20)
     # encoded targets E(o_{t+i+1}) keep their gradient, as in the precursor; detached, the latent collapsed here
     detach_targets: bool = False
+    # > 0: those targets come from a copy of the encoder that follows it by Polyak averaging at this rate per
+    # iteration, without gradient (TD-MPC's target encoder: 0.01; not the paper's); 0: the trained encoder's own
+    target_tau: float = 0.0
     replay_capacity: int = 1_000_000  # paper: 10^6
     # plug-in terms of the representation loss: name -> {_target_: a curiosity.agents.representation.LossTerm, coef}
     extra_terms: dict[str, Any] = field(default_factory=dict)

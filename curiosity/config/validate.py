@@ -82,6 +82,7 @@ RULES: list[Rule] = [
     ("planner.hold", lambda v: v >= 1, "an integer >= 1 (1: every env step its own action)"),
     ("planner.value_coef", lambda v: v >= 0, "a number >= 0 (0: no terminal value)"),
     ("agent.transition_ensemble", lambda v: v >= 1, "an integer >= 1 (1: one transition model)"),
+    ("agent.target_tau", lambda v: 0 <= v <= 1, "a rate in [0, 1] (0: no target encoder)"),
     ("intrinsic.terms.novelty.refresh_drift", lambda v: v >= 0, "a number >= 0 (0: refresh on the schedule only)"),
     ("intrinsic.terms.novelty.target_dim", lambda v: v >= 1, "an integer >= 1"),
     ("intrinsic.terms.novelty.target_hidden", lambda v: v >= 1, "an integer >= 1"),
