@@ -150,3 +150,28 @@ def test_the_power_study_reads_runs_and_its_seed_count_grows_as_the_margin_nears
     assert main([str(tmp_path / "ref"), str(tmp_path / "new")]) == 0
     out = capsys.readouterr().out
     assert "shared seeds 4; ratio of means 3.820" in out  # (110 + 3000 + 330 + 380) / 4 over 250: the cap counts
+
+
+def test_the_screen_stops_a_point_at_three_caps_or_at_one_and_a_half_times_its_base(tmp_path: Path, capsys) -> None:
+    from studies.screen import main, screen
+
+    base = {s: 200.0 for s in range(15)}
+    assert not screen({s: 300.0 for s in range(15)}, base, 3000).stop  # exactly 1.5x: goes on
+    assert screen({s: 301.0 for s in range(15)}, base, 3000).stop
+    two_caps = {s: 3000.0 if s < 2 else 100.0 for s in range(15)}
+    assert not screen(two_caps, {s: 1000.0 for s in range(15)}, 3000).stop  # two caps, mean 460 against 1000
+    three = {**two_caps, 2: 3000.0}
+    assert screen(three, {s: 3000.0 for s in range(15)}, 3000).caps == 3
+    assert screen(three, {s: 3000.0 for s in range(15)}, 3000).stop
+    with pytest.raises(KeyError, match=r"seeds \[14\]"):
+        screen({s: 1.0 for s in range(14)}, base, 3000)
+    for name, values in {"base": [100] * 15, "point": [None, None, None] + [100] * 12}.items():
+        for seed, steps in enumerate(values):
+            run = tmp_path / name / f"seed={seed}"
+            run.mkdir(parents=True)
+            (run / "summary.json").write_text(f'{{"steps_to_goal": {"null" if steps is None else steps}, "max_steps": 3000}}')
+    assert main([str(tmp_path / "point"), str(tmp_path / "base")]) == 1
+    assert "3 at the cap" in capsys.readouterr().out
+    assert main([str(tmp_path / "base"), str(tmp_path / "base")]) == 0
+    assert main([str(tmp_path / "base"), str(tmp_path / "base"), "--seeds", "16"]) == 2
+    assert "has not finished seeds [15]" in capsys.readouterr().out.splitlines()[-1]
