@@ -10,6 +10,7 @@ import torch
 from curiosity.losses import (
     double_dqn_loss,
     nstep_backward_loss,
+    nstep_code_loss,
     nstep_reward_loss,
     nstep_transition_loss,
     terminal_mask,
@@ -178,3 +179,19 @@ def test_the_total_loss_is_one_weighted_sum_over_named_terms() -> None:
     assert float(x.grad) == pytest.approx(0.5 + 2.0 * 2 * 2)
     with pytest.raises(KeyError):
         total_loss({"unknown": x}, weights)
+
+
+def test_nstep_code_loss_scores_the_head_of_the_open_loop_rollout_terminal_masked():
+    """Head h(z) = (2z, −z): predictions 1, 3, 4 and 3 (then masked) map to codes compared with the given ones."""
+    codes = torch.stack([torch.cat([2 * TARGETS, -TARGETS], -1)[0], torch.zeros(3, 2, dtype=torch.float64)])
+
+    def head(z):
+        return torch.cat([2 * z, -z], dim=1)
+
+    loss = nstep_code_loss(Z0, ACTIONS, codes, TERMS, shift_transition, head)
+    # seg 1: predicted 1, 3, 4 vs targets 1.5, 3.5, 2 -> (2 dz)^2 + dz^2 = 5 dz^2: 5 (0.25 + 0.25 + 4); seg 2: only
+    # step 1 counts (terminal after it): predicted 3 -> code (6, -3) vs 0: 45
+    assert loss.item() == pytest.approx((5 * 4.5 / 3 + 45 / 3) / 2, rel=1e-12)
+    z0 = Z0.clone().requires_grad_(True)
+    nstep_code_loss(z0, ACTIONS, codes, TERMS, shift_transition, head).backward()
+    assert z0.grad is not None and float(z0.grad.abs().sum()) > 0  # the start latent (the encoder) is trained

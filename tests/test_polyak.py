@@ -10,6 +10,7 @@ from curiosity.agents.paper import PaperAgent
 from curiosity.agents.representation import LossWeights, encode_segments, representation_terms
 from curiosity.nets.polyak import PolyakCopy
 from tests.conftest import compose_cfg
+from tests.test_agent import _drive
 
 
 class _Scaled(nn.Module):
@@ -96,13 +97,8 @@ def test_an_agent_with_a_target_encoder_trains_it_slowly_and_checkpoints_it() ->
     assert agent.target_encoder is not None
     start = [p.clone() for p in agent.target_encoder.parameters()]
     env = make_env(cfg.env, 100)
-    obs, _ = env.reset(seed=0)
-    for step in range(10):
-        action = agent.act(obs, step) if step >= 6 else step % 3
-        nxt, r, term, _, _ = env.step(action)
-        agent.observe(obs, action, float(r), nxt, bool(term), step)
-        obs = nxt
-    online = list(agent.model.encoder.parameters())
+    _drive(agent, env, env.reset(seed=0)[0], 4, [], warmup=6)
+    online = [p.detach() for p in agent.model.encoder.parameters()]
     moved = [float((p - s).abs().max()) for p, s in zip(agent.target_encoder.parameters(), start, strict=True)]
     behind = [float((o - p).abs().max()) for o, p in zip(online, agent.target_encoder.parameters(), strict=True)]
     assert max(moved) > 0 and max(behind) > max(moved)  # it follows the online encoder, slowly

@@ -8,6 +8,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 import torch
 
@@ -139,3 +140,40 @@ def test_a_run_with_random_target_novelty_trains_its_head(tmp_path: Path) -> Non
     header = lines[0].split(",")
     losses = [float(v) for row in lines[1:] if (v := dict(zip(header, row.split(","), strict=True))["novelty/target_loss"])]
     assert losses and all(np.isfinite(losses)), losses
+
+
+def test_the_code_term_trains_the_encoder_and_transition_to_predict_the_codes_but_not_the_head(tmp_path: Path) -> None:
+    """``agent.code_coef`` > 0: L gains the n-step code loss (logged as ``losses/code``); its gradient reaches the
+    encoder and the transition model, never the head g (which keeps its own fit); it needs random-code novelty."""
+    from curiosity.agents.paper import PaperAgent
+    from curiosity.agents.representation import encode_segments
+    from curiosity.envs import make_env
+    from tests.test_agent import _drive
+
+    cfg = compose_cfg(["env.renderer=fast", "budget=smoke", "budget.warmup_steps=8", "budget.iters_per_train=2",
+                       "agent.batch_size=4", "agent.probe_every=0", "intrinsic.terms.novelty.input=random_target",
+                       "agent.code_coef=0.5"])  # fmt: skip
+    agent = PaperAgent(cfg)
+    term = agent.extra_terms["code"]
+    assert term.coef == 0.5 and not list(term.parameters())  # g is the novelty's, not the term's
+    assert "losses/code" in agent.metric_keys and "code" not in PaperAgent(compose_cfg(["budget=smoke"])).extra_terms
+    env = make_env(cfg.env, 100)
+    _drive(agent, env, env.reset(seed=0)[0], 4, [], warmup=8)
+    target = agent.novelty.target
+    assert bool(target.calibrated)
+    seg = agent.replay.sample_segments(4, 2, agent.rng)
+    agent.model.zero_grad(set_to_none=True)
+    target.head.zero_grad(set_to_none=True)
+    loss = term(agent.model, seg, encode_segments(agent.model, seg))
+    loss.backward()
+    assert float(loss.detach()) > 0
+    assert all(p.grad is None for p in target.head.parameters())
+    assert any(p.grad is not None and float(p.grad.abs().sum()) > 0 for p in agent.model.encoder.parameters())
+    assert any(p.grad is not None and float(p.grad.abs().sum()) > 0 for p in agent.model.transition.parameters())
+    with pytest.raises(ConfigError, match=re.escape("agent.code_coef=0.5: the model predicts the random codes")):
+        validate(compose_cfg(["agent.code_coef=0.5"]))
+    summary = run(compose_cfg(["env.renderer=fast", "progress=false", "budget=smoke", "budget.max_steps=80",
+                               "budget.warmup_steps=40", "intrinsic.terms.novelty.input=random_target",
+                               "agent.code_coef=1"]), tmp_path)  # fmt: skip
+    codes = pd.read_csv(tmp_path / "metrics.csv")["losses/code"].dropna()
+    assert summary.env_steps == 80 and len(codes) and (codes > 0).all()

@@ -15,6 +15,7 @@ import torch
 from omegaconf import DictConfig, OmegaConf
 
 from curiosity.agents.base import Agent
+from curiosity.agents.code_term import code_term
 from curiosity.agents.diagnostics import PlanDiagnostics, PlanView
 from curiosity.agents.q_learning import QLearner
 from curiosity.agents.relabel import RelabelledRewards
@@ -119,6 +120,10 @@ class PaperAgent(Agent):
                              "needs; allowed: a latent reward (novelty, pe with intrinsic.terms.pe.imagined=dropout|ensemble, "
                              "icm/rnd with input=latent)")  # fmt: skip
         self.novelty: LatentNovelty | None = self.intrinsic.term(LatentNovelty)  # its memory, for analysis
+        # agent.code_coef > 0: L also asks the model to predict the random codes the novelty scores (a term without
+        # parameters of its own, so the optimisers built above are unchanged)
+        code_coef = float(OmegaConf.select(cfg, "agent.code_coef", default=0.0))
+        self.extra_terms.update(code_term(getattr(self.novelty, "target", None), code_coef))
         b = cfg.budget
         self.schedule = TrainSchedule(b.warmup_steps, b.train_every, b.iters_per_train, b.ramp, b.early_stop_every,
                                       b.early_stop_threshold, b.plateau_every, b.plateau_tol)  # fmt: skip

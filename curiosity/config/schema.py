@@ -445,6 +445,9 @@ class AgentKeysConfig:
     # > 0: those targets come from a copy of the encoder that follows it by Polyak averaging at this rate per
     # iteration, without gradient (TD-MPC's target encoder: 0.01; not the paper's); 0: the trained encoder's own
     target_tau: float = 0.0
+    # > 0 (with intrinsic.terms.novelty.input=random_target): L gains code_coef x the n-step loss of the random codes
+    # the model predicts, ||g(T^i(E(o_t))) - R(o_{t+i})||^2, g held (curiosity/agents/code_term.py; not the paper's)
+    code_coef: float = 0.0
     replay_capacity: int = 1_000_000  # paper: 10^6
     # plug-in terms of the representation loss: name -> {_target_: a curiosity.agents.representation.LossTerm, coef}
     extra_terms: dict[str, Any] = field(default_factory=dict)

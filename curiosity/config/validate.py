@@ -83,6 +83,7 @@ RULES: list[Rule] = [
     ("planner.value_coef", lambda v: v >= 0, "a number >= 0 (0: no terminal value)"),
     ("agent.transition_ensemble", lambda v: v >= 1, "an integer >= 1 (1: one transition model)"),
     ("agent.target_tau", lambda v: 0 <= v <= 1, "a rate in [0, 1] (0: no target encoder)"),
+    ("agent.code_coef", lambda v: v >= 0, "a number >= 0 (0: no code-prediction term)"),
     ("intrinsic.terms.novelty.refresh_drift", lambda v: v >= 0, "a number >= 0 (0: refresh on the schedule only)"),
     ("intrinsic.terms.novelty.target_dim", lambda v: v >= 1, "an integer >= 1"),
     ("intrinsic.terms.novelty.target_hidden", lambda v: v >= 1, "an integer >= 1"),
@@ -163,6 +164,12 @@ def _cross_field_errors(cfg: DictConfig) -> list[str]:
           and not OmegaConf.select(cfg, "planner.value_coef", default=0)):  # fmt: skip
         errors.append(f"agent.q_intrinsic=relabel: rescored rewards feed Q targets, and planner={cfg.planner.name} has no "
                       "Q; allowed: agent.q_intrinsic=batch, or planner=qtree, or planner.value_coef > 0")  # fmt: skip
+    code_coef = OmegaConf.select(cfg, "agent.code_coef", default=0.0)
+    novelty_input = OmegaConf.select(cfg, "intrinsic.terms.novelty.input", default=None)
+    if code_coef and code_coef > 0 and choice(novelty_input) != "random_target":
+        errors.append(f"agent.code_coef={code_coef}: the model predicts the random codes of random-code novelty, and "
+                      f"intrinsic.terms.novelty.input={choice(novelty_input)}; allowed: agent.code_coef=0, or "
+                      "intrinsic.terms.novelty.input=random_target")  # fmt: skip
     errors += _encoder_layout_errors(cfg)
     random_dim = OmegaConf.select(cfg, "encoder.random_dim", default=None)
     if random_dim is not None and not 1 <= random_dim < cfg.agent.internal_dim:

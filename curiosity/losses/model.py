@@ -71,6 +71,35 @@ def nstep_transition_loss(
     return masked_step_mean(per_step, terminal_mask(terminateds))
 
 
+def nstep_code_loss(
+    z0: Tensor,
+    actions_onehot: Tensor,
+    codes: Tensor,
+    terminateds: Tensor,
+    transition: TransitionFn,
+    head: Callable[[Tensor], Tensor],
+) -> Tensor:
+    """Terminal-masked n-step loss of the codes the model predicts: L = (1/n) Σ_{i<n} m_i ‖h(ŝ_{t+i+1}) − c_{t+i+1}‖²,
+    ŝ the open-loop rollout of :func:`rollout_latents` from z0, h a head from latents to codes, c the codes of the
+    observations reached (e.g. a frozen random encoder's, which the planner's novelty scores), averaged over the batch.
+
+    Args:
+        z0: (B, d) start latents.
+        actions_onehot: (B, n, A) one-hot actions.
+        codes: (B, n, k) the codes of o_{t+1} .. o_{t+n}.
+        terminateds: (B, n) terminal flags.
+        transition: T(z (B, d), a_onehot (B, A)) -> (B, d).
+        head: h(z (M, d)) -> (M, k).
+
+    Returns:
+        Scalar loss.
+    """
+    states = rollout_latents(z0, actions_onehot, transition)[:, 1:]
+    b, n, d = states.shape
+    predicted = head(states.reshape(b * n, d)).reshape(b, n, -1)
+    return masked_step_mean((predicted - codes).square().sum(-1), terminal_mask(terminateds))
+
+
 def nstep_reward_loss(
     latents: Tensor,
     actions_onehot: Tensor,
