@@ -55,9 +55,27 @@ def test_every_option_composes_and_validates(group: str, option: str) -> None:
 
 def test_defaults_are_the_paper_agent_on_acrobot_pixels() -> None:
     cfg = compose_cfg()
-    assert (cfg.env.id, cfg.env.obs.value, cfg.baseline.name, cfg.budget.name) == ("Acrobot-v1", "pixels", "none", "quick")
+    assert (cfg.env.id, cfg.env.obs.value, cfg.baseline.name, cfg.budget.name) == ("Acrobot-v1", "pixels", "none", "per_plan")
     assert cfg.budget.max_steps == 3000 and cfg.planner.name == "mpc" and cfg.estimator.name == "kde"
-    assert (cfg.encoder.name, cfg.encoder.blur_sigma, cfg.planner.hold) == ("conv_blur", 4.0, 4)  # the agent study's
+    assert (cfg.encoder.blur_sigma, cfg.planner.hold) == (4.0, 4)  # the agent study's
+    # the cheap seed's (issue 50): training once per plan, 16 x 16 frames, random-code novelty, a wider model
+    assert (cfg.budget.train_every, cfg.budget.iters_per_train) == (20, 64)
+    assert (cfg.encoder.name, cfg.encoder.downsample, list(cfg.encoder.pools)) == ("conv_blur16", 2, [2, 3])
+    assert cfg.intrinsic.terms.novelty.input.value == "random_target" and cfg.agent.transition_hidden == 64
+    # on state vectors the novelty falls back to the latent state (random codes need frames)
+    state = compose_cfg(["env.obs=state", "encoder=mlp"])
+    assert state.intrinsic.terms.novelty.input.value == "state"
+    validate(state)
+
+
+@pytest.mark.parametrize("preset", ["+experiment=paper_text", "+experiment=paper_code", "baseline=nsrs"])
+def test_the_papers_presets_and_nsrs_keep_their_schedule_and_model_whatever_the_default(preset: str) -> None:
+    """Issue 50 moved the default to budget=per_plan and a transition model 64 wide; the presets that claim a reading
+    keep 16 iterations at every env step and the paper's 10 hidden units."""
+    cfg = compose_cfg([preset])
+    assert (cfg.budget.name, cfg.budget.train_every, cfg.budget.iters_per_train) == ("quick", 1, 16)
+    assert cfg.agent.transition_hidden == 10
+    assert compose_cfg([preset, "budget=faithful"]).budget.name == "faithful"  # the command line still wins
 
 
 @pytest.mark.parametrize("preset", ["baseline=nsrs", "baseline=icm", "baseline=rnd", "+experiment=paper_text",
@@ -154,7 +172,7 @@ def test_bad_ranges_name_seed(arg: str) -> None:
     ("overrides", "message"),
     [
         (["encoder=mlp"], "encoder=mlp: takes state observations, but env=acrobot has env.obs=pixels"),
-        (["env.obs=state"], "encoder=conv_blur: takes pixel observations"),
+        (["env.obs=state"], "encoder=conv_blur16: takes pixel observations"),
         (["env=chain"], "allowed: encoder=mlp with env.obs=state"),
         (["env=chain", "encoder=mlp", "env.obs=pixels"], "env.obs=pixels: env=chain has no pixel observations"),
         (["planner.horizon=20"], "planner.horizon=20: 3^20 = 3486784401 candidate sequences exceed planner.max_candidates"),

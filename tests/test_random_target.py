@@ -171,7 +171,7 @@ def test_the_code_term_trains_the_encoder_and_transition_to_predict_the_codes_bu
     assert any(p.grad is not None and float(p.grad.abs().sum()) > 0 for p in agent.model.encoder.parameters())
     assert any(p.grad is not None and float(p.grad.abs().sum()) > 0 for p in agent.model.transition.parameters())
     with pytest.raises(ConfigError, match=re.escape("agent.code_coef=0.5: the model predicts the random codes")):
-        validate(compose_cfg(["agent.code_coef=0.5"]))
+        validate(compose_cfg(["agent.code_coef=0.5", "intrinsic.terms.novelty.input=state"]))
     summary = run(compose_cfg(["env.renderer=fast", "progress=false", "budget=smoke", "budget.max_steps=80",
                                "budget.warmup_steps=40", "intrinsic.terms.novelty.input=random_target",
                                "agent.code_coef=1"]), tmp_path)  # fmt: skip

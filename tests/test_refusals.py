@@ -75,6 +75,7 @@ OUT_OF_RANGE = dict([
     _out_of_range("intrinsic.terms.icm.feature_dim", "0", *ICM), _out_of_range("intrinsic.terms.rnd.out_dim", "0", *RND),
     _out_of_range("intrinsic.terms.rnd.gamma_int", "1.5", *RND), _out_of_range("intrinsic.terms.rnd.obs_clip", "0", *RND),
     _out_of_range("agent.transition_ensemble", "0"), _out_of_range("agent.target_tau", "1.5"),
+    _out_of_range("agent.code_coef", "-1"),
     _out_of_range("intrinsic.terms.novelty.refresh_drift", "-0.1"),
     _out_of_range("agent.probe_every", "-1"), _out_of_range("intrinsic.scale", "-1"),
     _out_of_range("intrinsic.terms.rnd.lr", "0", *RND),
@@ -107,7 +108,7 @@ OTHER = {
     "-m seed=3-1": Case(("-m", "seed=3-1"), "seed"),
     # groups that do not fit together, and a planner that cannot enumerate its candidates
     "encoder=mlp with pixels": Case(("encoder=mlp",), "encoder"),
-    "encoder=conv_blur (the default) with env.obs=state": Case(("env.obs=state",), "encoder"),
+    "encoder=conv_blur16 (the default) with env.obs=state": Case(("env.obs=state",), "encoder"),
     "env=chain as listed": Case(("env=chain",), "encoder"),
     "env=chain with pixels": Case(("env=chain", "encoder=mlp", "env.obs=pixels"), "env.obs"),
     "planner.horizon=20": Case(("planner.horizon=20",), "planner.horizon"),

@@ -70,6 +70,12 @@ def power(base: int, exponent: int) -> int:
     return int(base) ** int(exponent)
 
 
+def by_obs(obs: object, pixels: str, state: str) -> str:
+    """``${by_obs:${env.obs},a,b}`` = a for pixel observations, b for state vectors: the default's novelty input,
+    random codes of the frames where there are frames (``random_target``), else the latent state (``state``)."""
+    return pixels if str(getattr(obs, "value", obs)) == "pixels" else state
+
+
 def _env_state_dim(env_id: str) -> int:
     from curiosity.envs.adapter import env_state_dim
 
@@ -78,11 +84,12 @@ def _env_state_dim(env_id: str) -> int:
 
 def register_resolvers() -> None:
     """Register ``${run_variant:...}``, ``${help_groups:}``, ``${one_minus:...}``, ``${power:a,b}``,
-    ``${env_actions:<id>,<distractor>}`` and ``${env_state_dim:<id>}``; safe to call more than once (jobs share a
-    process)."""
+    ``${env_actions:<id>,<distractor>}``, ``${env_state_dim:<id>}`` and ``${by_obs:<obs>,a,b}``; safe to call more
+    than once (jobs share a process)."""
     OmegaConf.register_new_resolver("run_variant", run_variant, replace=True)
     OmegaConf.register_new_resolver("help_groups", help_groups, replace=True)
     OmegaConf.register_new_resolver("one_minus", one_minus, replace=True)
     OmegaConf.register_new_resolver("power", power, replace=True)
     OmegaConf.register_new_resolver("env_actions", _env_actions, replace=True)
     OmegaConf.register_new_resolver("env_state_dim", _env_state_dim, replace=True)
+    OmegaConf.register_new_resolver("by_obs", by_obs, replace=True)

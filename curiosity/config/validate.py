@@ -110,7 +110,7 @@ RULES: list[Rule] = [
 ]
 
 # The observations each encoder takes, and the largest tree a tree planner may expand at every env step.
-ENCODER_OBS = {"conv": "pixels", "conv_blur": "pixels", "conv_with_random": "pixels", "mlp": "state"}
+ENCODER_OBS = {"conv": "pixels", "conv_blur": "pixels", "conv_blur16": "pixels", "conv_with_random": "pixels", "mlp": "state"}
 MAX_TREE_LEAVES = 3**10
 CPU_ONLY_BASELINES = ("icm", "rnd")  # the Q agent's intrinsic rewards keep their networks on the CPU
 

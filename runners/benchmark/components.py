@@ -13,6 +13,7 @@ from curiosity.agents.paper import PaperAgent
 from curiosity.config import build
 from curiosity.config.compose import compose_config
 from curiosity.envs import make_env
+from curiosity.intrinsic.latent_novelty import RandomTargetNovelty
 from curiosity.novelty.estimators import KDENovelty
 from curiosity.novelty.kde import kde_log_density
 from curiosity.runtime.seeding import seed_everything
@@ -38,7 +39,8 @@ def env_steps_per_s(env_name: str, pipeline: str, steps: int = 400) -> float:
 def filled_agent(overrides: Sequence[str], memory: int) -> tuple[PaperAgent, np.ndarray, Tensor, Tensor]:
     """The paper's agent after ``memory`` uniformly random env steps (fast renderer): replay and novelty memory hold
     them (encoded in batches of 512; a reservoir keeps a sample), memory refreshed. Returns the agent, the last
-    observation, and the latents (memory, d) and actions (memory,) of every step (the exact reference)."""
+    observation, and what the memory embeds of every step, latents (memory, d) or random codes (memory, k), and its
+    actions (memory,) (the exact reference)."""
     cfg = compose_config(["env.renderer=fast", f"budget.warmup_steps={min(64, memory)}", *overrides])
     seed_everything(0, threads=torch.get_num_threads())
     env = make_env(cfg.env, memory + 10)
@@ -57,14 +59,24 @@ def filled_agent(overrides: Sequence[str], memory: int) -> tuple[PaperAgent, np.
             block.append(obs)
             actions.append(action)
             obs = nxt
-        with agent.model.evaluating():
-            z = agent.model.encode(torch.as_tensor(np.stack(block)))
+        z = _novelty_source(agent, torch.as_tensor(np.stack(block)), int(cfg.budget.warmup_steps))
         a = torch.tensor(actions)
         cur.memory.add(cur.embed(z, a), keys=torch.arange(start, start + len(block)))
         latents.append(z)
         all_actions.append(a)
     cur.refresh()
     return agent, obs, torch.cat(latents), torch.cat(all_actions)
+
+
+def _novelty_source(agent: PaperAgent, frames: Tensor, warmup_steps: int) -> Tensor:
+    """What the novelty memory embeds for ``frames`` (B, *obs): the frozen random encoder's codes for random-code
+    novelty (standardised on the warm-up's frames first, as the run does at its first refresh), else E(o)."""
+    cur = agent.novelty
+    if isinstance(cur, RandomTargetNovelty):
+        cur.target.calibrate(agent.replay.obs_at(np.arange(min(warmup_steps, agent.replay.total_added))))
+        return cur.target.codes(frames)
+    with agent.model.evaluating():
+        return agent.model.encode(frames)
 
 
 def train_iter_ms(batches: Sequence[int], repeats: int) -> dict[int, float]:
