@@ -13,7 +13,7 @@ from __future__ import annotations
 from torch import Tensor
 from torch.func import functional_call
 
-from curiosity.agents.representation import Encoded, LossTerm
+from curiosity.agents.representation import Encoded, LossTerm, per_frame
 from curiosity.losses import nstep_code_loss
 from curiosity.nets.world_model import WorldModel
 from curiosity.novelty.random_target import RandomTarget
@@ -39,8 +39,7 @@ class CodePrediction(LossTerm):
         z0 = enc.z[:, 0]
         if not bool(target.calibrated):
             return z0.sum() * 0.0
-        b, n1 = seg.obs.shape[:2]
-        codes = target.codes(seg.obs[:, 1:].reshape(b * (n1 - 1), *seg.obs.shape[2:])).reshape(b, n1 - 1, -1)
+        codes = per_frame(target.codes, seg.obs[:, 1:])
         # a copy: g takes its own optimiser step before this loss is backpropagated (detach would share its storage)
         held = {name: p.detach().clone() for name, p in target.head.named_parameters()}
 

@@ -90,7 +90,7 @@ class PaperAgent(Agent):
         self.regulariser = build(cfg.entropy)
         own = cfg.agent
         # agent.target_tau > 0: the transition loss's targets come from a slowly moving copy of the encoder (TD-MPC)
-        tau = float(OmegaConf.select(cfg, "agent.target_tau", default=0.0))
+        tau = float(own.target_tau)
         self.target_encoder = PolyakCopy(self.model.encoder, tau).to(self.device) if tau > 0 else None
         self.weights = LossWeights(transition=own.transition_coef, reward=own.reward_coef, backward=cfg.backward.coef,
                                    q=own.q_coef, sigma_b=cfg.backward.sigma_b, normalised_transition=own.normalised_transition,
@@ -99,7 +99,6 @@ class PaperAgent(Agent):
         self.extra_terms = torch.nn.ModuleDict({name: build(node, latent_dim=int(own.internal_dim), n_actions=self.n_actions)
                                                 for name, node in own.extra_terms.items()}).to(self.device)  # fmt: skip
         self.planner: Planner = build(cfg.planner)
-        self._leaf_value = bool(getattr(self.planner, "value_coef", 0.0))  # MPC with a terminal value Q of the leaf
         self.q = (QLearner(self.model.encoder, own.internal_dim, self.n_actions, gamma=self.planner.step_discount,
                            target_every=own.q_target_every, huber=own.q_huber)
                   if self.planner.needs_q else None)  # fmt: skip
@@ -122,8 +121,7 @@ class PaperAgent(Agent):
         self.novelty: LatentNovelty | None = self.intrinsic.term(LatentNovelty)  # its memory, for analysis
         # agent.code_coef > 0: L also asks the model to predict the random codes the novelty scores (a term without
         # parameters of its own, so the optimisers built above are unchanged)
-        code_coef = float(OmegaConf.select(cfg, "agent.code_coef", default=0.0))
-        self.extra_terms.update(code_term(getattr(self.novelty, "target", None), code_coef))
+        self.extra_terms.update(code_term(getattr(self.novelty, "target", None), float(own.code_coef)))
         b = cfg.budget
         self.schedule = TrainSchedule(b.warmup_steps, b.train_every, b.iters_per_train, b.ramp, b.early_stop_every,
                                       b.early_stop_threshold, b.plateau_every, b.plateau_tol)  # fmt: skip
@@ -135,8 +133,8 @@ class PaperAgent(Agent):
         first = tuple(f"planner/p_first/{a}" for a in range(self.n_actions))
         probe = self.diagnostics.keys
         # each term's spread across candidates (and the leaves' value's, with MPC's terminal value)
-        spread = tuple(f"planner/spread/{name}"
-                       for name in (*self.intrinsic.terms, *(("value",) if self._leaf_value else ())))  # fmt: skip
+        leaf_value = self.planner.needs_q and self.planner.scores_candidates  # MPC with a terminal value Q of the leaf
+        spread = tuple(f"planner/spread/{name}" for name in (*self.intrinsic.terms, *(("value",) if leaf_value else ())))
         extra_keys = tuple(f"losses/{name}" for name in self.extra_terms)
         self.metric_keys = (*LOSS_KEYS, *extra_keys, *self.intrinsic.log_keys, *AGENT_KEYS, *spread, *first, *probe)
         self._plan_logs: dict[str, float] = {}

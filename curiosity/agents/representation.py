@@ -94,14 +94,17 @@ class Encoded:
     targets: Tensor | None = None
 
 
+def per_frame(fn: Callable[[Tensor], Tensor], frames: Tensor) -> Tensor:
+    """``fn`` over every frame of segments in one pass: fn (M, *obs) -> (M, k), frames (B, n, *obs) -> (B, n, k)."""
+    b, n = frames.shape[:2]
+    return fn(frames.reshape(b * n, *frames.shape[2:])).reshape(b, n, -1)
+
+
 def encode_segments(model: WorldModel, seg: SegmentBatch, target: Callable[[Tensor], Tensor] | None = None) -> Encoded:
     """Encode every observation of the segments in one pass: (B, n + 1, *obs) -> (B, n + 1, d); with ``target`` (a
     slowly moving copy of the encoder, no gradient) also the targets of o_{t+1} .. o_{t+n}, (B, n, d)."""
-    b, n1 = seg.obs.shape[:2]
-    z = model.encode(seg.obs.reshape(b * n1, *seg.obs.shape[2:])).reshape(b, n1, -1)
-    targets = None
-    if target is not None:
-        targets = target(seg.obs[:, 1:].reshape(b * (n1 - 1), *seg.obs.shape[2:])).reshape(b, n1 - 1, -1)
+    z = per_frame(model.encode, seg.obs)
+    targets = per_frame(target, seg.obs[:, 1:]) if target is not None else None
     return Encoded(z=z, a1h=one_hot(seg.act, model.n_actions).to(z.dtype), targets=targets)
 
 

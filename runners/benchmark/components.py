@@ -13,7 +13,6 @@ from curiosity.agents.paper import PaperAgent
 from curiosity.config import build
 from curiosity.config.compose import compose_config
 from curiosity.envs import make_env
-from curiosity.intrinsic.latent_novelty import RandomTargetNovelty
 from curiosity.novelty.estimators import KDENovelty
 from curiosity.novelty.kde import kde_log_density
 from curiosity.runtime.seeding import seed_everything
@@ -59,7 +58,7 @@ def filled_agent(overrides: Sequence[str], memory: int) -> tuple[PaperAgent, np.
             block.append(obs)
             actions.append(action)
             obs = nxt
-        z = _novelty_source(agent, torch.as_tensor(np.stack(block)), int(cfg.budget.warmup_steps))
+        z = _novelty_source(agent, torch.as_tensor(np.stack(block)))
         a = torch.tensor(actions)
         cur.memory.add(cur.embed(z, a), keys=torch.arange(start, start + len(block)))
         latents.append(z)
@@ -68,15 +67,13 @@ def filled_agent(overrides: Sequence[str], memory: int) -> tuple[PaperAgent, np.
     return agent, obs, torch.cat(latents), torch.cat(all_actions)
 
 
-def _novelty_source(agent: PaperAgent, frames: Tensor, warmup_steps: int) -> Tensor:
-    """What the novelty memory embeds for ``frames`` (B, *obs): the frozen random encoder's codes for random-code
-    novelty (standardised on the warm-up's frames first, as the run does at its first refresh), else E(o)."""
+def _novelty_source(agent: PaperAgent, frames: Tensor) -> Tensor:
+    """What the novelty memory embeds for ``frames`` (B, *obs), by the novelty's own code: E(o), or the frozen random
+    encoder's codes for random-code novelty (standardised first on the warm-up's frames, as at a run's first refresh)."""
     cur = agent.novelty
-    if isinstance(cur, RandomTargetNovelty):
-        cur.target.calibrate(agent.replay.obs_at(np.arange(min(warmup_steps, agent.replay.total_added))))
-        return cur.target.codes(frames)
-    with agent.model.evaluating():
-        return agent.model.encode(frames)
+    assert cur is not None
+    cur._before_refresh()
+    return cur._code(frames)
 
 
 def train_iter_ms(batches: Sequence[int], repeats: int) -> dict[int, float]:
